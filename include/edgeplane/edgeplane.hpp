@@ -1,0 +1,15 @@
+// edgeplane: umbrella header for the CPU library (plain C++20; no CUDA needed).
+#pragma once
+#include "edgeplane/backend/cpu.hpp"
+#include "edgeplane/camera.hpp"
+#include "edgeplane/edges/detect_edges.hpp"
+#include "edgeplane/error.hpp"
+#include "edgeplane/filters/depth.hpp"
+#include "edgeplane/image.hpp"
+#include "edgeplane/labels/label_ops.hpp"
+#include "edgeplane/labels/union_find.hpp"
+#include "edgeplane/params.hpp"
+#include "edgeplane/planes/plane_stats.hpp"
+#include "edgeplane/planes/validate.hpp"
+#include "edgeplane/segmenter.hpp"
+#include "edgeplane/segments/line_segments.hpp"

@@ -1,0 +1,119 @@
+// edgeplane: the four kinds of 3-D edge, each a policy with a host/device predicate over the two
+// opposite neighbour arrays of one direction (see README "Method" for each rule and its repair).
+//
+// Points are metric camera-frame points (metres).  A straightness test compares a deviation with
+// `t * chord + noise_k * sigma(z_c)`: relative to the length it is measured over, so one threshold
+// holds at every range, resolution and focal length, plus an allowance for the sensor's noise.
+#pragma once
+#include <cstdint>
+
+#include "edgeplane/config.hpp"
+#include "edgeplane/edges/neighbourhood.hpp"
+
+namespace edgeplane {
+
+/// Bits of the edge map.
+enum edge_bits : std::uint8_t {
+  edge_jump = 1,
+  edge_extrema = 2,
+  edge_corner = 4,
+  edge_curved = 8,
+  edge_invalid = 16,  ///< the pixel has no valid depth
+};
+
+namespace edge_type {
+
+/// Jump edge: the nearest neighbour on either side differs in depth by more than
+/// t_abs + t_quad * z_c^2 metres.
+struct jump {
+  float t_abs, t_quad;
+  static constexpr std::uint8_t bit = edge_jump;
+  EDGEPLANE_HD int reach() const { return 1; }
+  EDGEPLANE_HD bool operator()(const detail::neighbourhood& nb) const {
+    const float t = t_abs + t_quad * nb.zc * nb.zc;
+    return (nb.nl >= 1 && fabsf(nb.zl[0] - nb.zc) > t) || (nb.nr >= 1 && fabsf(nb.zr[0] - nb.zc) > t);
+  }
+};
+
+/// Extrema edge: c is nearer than all 2n neighbours by the factor t (z_c < t * z_i), or farther
+/// than all of them (z_c > z_i / t).  Read literally (all neighbours deeper than t * z_c) the
+/// thesis's rule holds on every flat surface; this is its evident intent.
+struct extrema {
+  float t;
+  int n;
+  static constexpr std::uint8_t bit = edge_extrema;
+  EDGEPLANE_HD int reach() const { return n; }
+  EDGEPLANE_HD bool operator()(const detail::neighbourhood& nb) const {
+    if (nb.nl < n || nb.nr < n) return false;
+    bool nearer = true, farther = true;
+    for (int k = 0; k < n; ++k) {
+      const float a = nb.zl[k], b = nb.zr[k];
+      nearer = nearer && nb.zc < t * a && nb.zc < t * b;
+      farther = farther && nb.zc * t > a && nb.zc * t > b;
+    }
+    return nearer || farther;
+  }
+};
+
+/// Corner edge (a crease between two flat surfaces): both arms of n neighbours are straight (every
+/// inner point within t_arm * chord + noise of the line from c to the arm's end), and c itself lies
+/// farther than t_bend * |chord| + noise from the chord joining the two arms' centres.  The thesis
+/// asks this of every inner-half point, which needs a bend n/2 times the threshold; c alone is the
+/// vertex of the V.
+struct corner {
+  float t_bend, t_arm, noise_k;
+  int n;
+  detail::noise_sigma sigma;
+  static constexpr std::uint8_t bit = edge_corner;
+  EDGEPLANE_HD int reach() const { return n; }
+  EDGEPLANE_HD bool operator()(const detail::neighbourhood& nb) const {
+    if (nb.nl < n || nb.nr < n) return false;
+    const float noise = noise_k * sigma(nb.zc);
+    float dev, len;
+    detail::arm_deviation(nb, -1, n, dev, len);
+    if (dev > t_arm * len + noise) return false;
+    detail::arm_deviation(nb, +1, n, dev, len);
+    if (dev > t_arm * len + noise) return false;
+    const int h = n / 2 > 0 ? n / 2 : 1;
+    const detail::point3 a = nb.left(h), b = nb.right(h);
+    const float chord = detail::norm(b - a);
+    const float sag = sqrtf(detail::dist2_to_line(nb.center(), a, b));
+    return sag > t_bend * chord + noise;
+  }
+};
+
+/// Curved edge (where a flat surface meets a curved one): exactly one arm is straight within
+/// t_straight, and the other bends like an arc: its deviation from its chord at the middle exceeds
+/// t_bend * chord + noise, and at a quarter and three quarters of its length it is at least 0.6
+/// of that (a circular arc gives 0.75; a kink, i.e. a crease a few pixels away, gives less on one
+/// side, so flat pixels near a crease are not marked).
+struct curved {
+  float t_straight, t_bend, noise_k;
+  int n;
+  detail::noise_sigma sigma;
+  static constexpr std::uint8_t bit = edge_curved;
+  EDGEPLANE_HD int reach() const { return n; }
+  EDGEPLANE_HD bool arc_like(const detail::neighbourhood& nb, int s, float noise) const {
+    const detail::point3 c = nb.center(), e = nb.side(s, n);
+    const float chord = detail::norm(e - c);
+    const int q1 = n / 4 > 0 ? n / 4 : 1, mid = n / 2 > 0 ? n / 2 : 1, q3 = (3 * n) / 4;
+    const float dm = sqrtf(detail::dist2_to_line(nb.side(s, mid), c, e));
+    if (!(dm > t_bend * chord + noise)) return false;
+    const float d1 = sqrtf(detail::dist2_to_line(nb.side(s, q1), c, e));
+    const float d3 = sqrtf(detail::dist2_to_line(nb.side(s, q3), c, e));
+    return d1 >= 0.6f * dm && d3 >= 0.6f * dm;
+  }
+  EDGEPLANE_HD bool operator()(const detail::neighbourhood& nb) const {
+    if (nb.nl < n || nb.nr < n) return false;
+    const float noise = noise_k * sigma(nb.zc);
+    float dl, ll, dr, lr;
+    detail::arm_deviation(nb, -1, n, dl, ll);
+    detail::arm_deviation(nb, +1, n, dr, lr);
+    const bool sl = dl <= t_straight * ll + noise, sr = dr <= t_straight * lr + noise;
+    if (sl == sr) return false;  // both straight (flat or corner) or both bent (inside a curve)
+    return arc_like(nb, sl ? +1 : -1, noise);
+  }
+};
+
+}  // namespace edge_type
+}  // namespace edgeplane

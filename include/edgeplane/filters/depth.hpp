@@ -1,0 +1,140 @@
+// edgeplane: depth preprocessing.  Conversion to metres, the closing filter that fills pepper
+// holes, and the optional 2x downscale.  Working depth images are float metres, 0 = invalid.
+#pragma once
+#include <cmath>
+#include <cstdint>
+
+#include "edgeplane/config.hpp"
+#include "edgeplane/image.hpp"
+
+namespace edgeplane {
+namespace detail {
+
+/// Converts raw depth (uint16 units or float metres) to float metres; 0, NaN, infinities,
+/// negatives and values outside [min_depth, max_depth] become 0 (invalid).
+template <class In>
+struct convert_depth_kernel {
+  image_view<const In> in;
+  image_view<float> out;
+  float scale;  // metres per unit
+  float min_depth, max_depth;
+  EDGEPLANE_HD void operator()(std::int64_t i) const {
+    const int x = static_cast<int>(i % out.width), y = static_cast<int>(i / out.width);
+    const float z = static_cast<float>(in(x, y)) * scale;
+    out(x, y) = (z >= min_depth && z <= max_depth && z > 0.f) ? z : 0.f;  // NaN fails every comparison
+  }
+};
+
+/// Dilation half of the hole-filling closing: the largest valid depth in the (2r+1)^2 window.
+struct depth_dilate_kernel {
+  image_view<const float> in;
+  image_view<float> out;
+  int r;
+  EDGEPLANE_HD void operator()(std::int64_t i) const {
+    const int x = static_cast<int>(i % in.width), y = static_cast<int>(i / in.width);
+    float m = in(x, y);
+    if (m <= 0.f) {  // only invalid pixels need the dilation; valid ones keep their depth
+      for (int dy = -r; dy <= r; ++dy)
+        for (int dx = -r; dx <= r; ++dx)
+          if (in.contains(x + dx, y + dy)) {
+            const float v = in(x + dx, y + dy);
+            m = v > m ? v : m;
+          }
+    }
+    out(x, y) = m;
+  }
+};
+
+/// Erosion half: an originally invalid pixel takes the smallest dilated depth of its window, or
+/// stays invalid when the window still holds an invalid pixel (the hole was wider than the filter).
+/// Valid pixels are never changed (the closing fills holes; it does not move depth edges).
+struct depth_erode_kernel {
+  image_view<const float> original;
+  image_view<const float> dilated;
+  image_view<float> out;
+  int r;
+  EDGEPLANE_HD void operator()(std::int64_t i) const {
+    const int x = static_cast<int>(i % out.width), y = static_cast<int>(i / out.width);
+    const float z = original(x, y);
+    if (z > 0.f) {
+      out(x, y) = z;
+      return;
+    }
+    float m = 3.4e38f;
+    for (int dy = -r; dy <= r; ++dy)
+      for (int dx = -r; dx <= r; ++dx)
+        if (dilated.contains(x + dx, y + dy)) {
+          const float v = dilated(x + dx, y + dy);
+          if (v <= 0.f) {
+            out(x, y) = 0.f;
+            return;
+          }
+          m = v < m ? v : m;
+        }
+    out(x, y) = m;
+  }
+};
+
+/// 2x downscale: the mean of the valid pixels of each 2x2 block that lie within 2% of the
+/// block's nearest valid depth (so a block straddling a depth edge takes the near surface, never
+/// a depth between the two surfaces).  Odd last rows/columns are dropped.
+struct downscale_kernel {
+  image_view<const float> in;
+  image_view<float> out;
+  EDGEPLANE_HD void operator()(std::int64_t i) const {
+    const int x = static_cast<int>(i % out.width), y = static_cast<int>(i / out.width);
+    float v[4] = {in(2 * x, 2 * y), in(2 * x + 1, 2 * y), in(2 * x, 2 * y + 1), in(2 * x + 1, 2 * y + 1)};
+    float mn = 3.4e38f;
+    for (float z : v)
+      if (z > 0.f && z < mn) mn = z;
+    if (mn == 3.4e38f) {
+      out(x, y) = 0.f;
+      return;
+    }
+    float s = 0.f;
+    int n = 0;
+    for (float z : v)
+      if (z > 0.f && z <= mn * 1.02f) {
+        s += z;
+        ++n;
+      }
+    out(x, y) = s / static_cast<float>(n);
+  }
+};
+
+}  // namespace detail
+
+/// Converts raw uint16 depth (scale = metres per unit) or float metres (scale 1) into a working
+/// depth image (float metres, 0 = invalid).  Views in the backend's memory; asynchronous on
+/// device backends.
+template <class Backend, class In>
+void convert_depth(const Backend& b, image_view<const In> in, float scale, float min_depth, float max_depth,
+                   image_view<float> out) {
+  detail::check_view(in, "depth");
+  detail::check_view(out, "converted depth");
+  detail::check_same_size(in, out, "depth", "converted depth");
+  detail::require(std::isfinite(scale) && scale > 0.f, "depth scale must be positive and finite (got " +
+                                                           std::to_string(scale) + " metres per unit)");
+  b.for_each_index(in.pixels(), detail::convert_depth_kernel<In>{in, out, scale, min_depth, max_depth});
+}
+
+/// The closing filter (dilate, then erode, square window of half-size r) restricted to invalid
+/// pixels: fills pepper holes narrower than the window and leaves valid depth untouched.
+/// `scratch` must be the size of the image; `depth` is filtered in place.
+template <class Backend>
+void close_depth(const Backend& b, image_view<float> depth, image_view<float> scratch, image_view<float> out, int r) {
+  detail::check_same_size(depth, scratch, "depth", "scratch");
+  detail::check_same_size(depth, out, "depth", "output");
+  b.for_each_index(depth.pixels(), detail::depth_dilate_kernel{depth, scratch, r});
+  b.for_each_index(depth.pixels(), detail::depth_erode_kernel{depth, scratch, out, r});
+}
+
+/// 2x downscale of a working depth image into out (width/2 x height/2).
+template <class Backend>
+void downscale_depth(const Backend& b, image_view<const float> in, image_view<float> out) {
+  detail::require(out.width == in.width / 2 && out.height == in.height / 2,
+                  "downscale output must be half the input size");
+  b.for_each_index(out.pixels(), detail::downscale_kernel{in, out});
+}
+
+}  // namespace edgeplane

@@ -1,0 +1,121 @@
+// edgeplane: operations on label images: relabelling through a table, plane-guided growth into
+// unlabelled pixels, the final closing, and nearest-neighbour upsampling.
+#pragma once
+#include <cstdint>
+
+#include "edgeplane/config.hpp"
+#include "edgeplane/detail/geometry.hpp"
+#include "edgeplane/image.hpp"
+
+namespace edgeplane::detail {
+
+/// labels(i) = table[source(i)] (source gives 1-based candidate ids; table[0] = 0).
+template <class Source>
+struct relabel_kernel {
+  Source source;
+  const std::uint16_t* table;
+  image_view<std::uint16_t> labels;
+  EDGEPLANE_HD void operator()(std::int64_t i) const {
+    labels(static_cast<int>(i % labels.width), static_cast<int>(i / labels.width)) = table[source(i)];
+  }
+};
+
+/// One step of plane-guided growth: an unlabelled pixel with valid depth takes the label of the
+/// 4-neighbour whose plane (n . X + d = 0, `planes` holds nx, ny, nz, d per label, label 0 unused)
+/// is nearest to its point, if that distance is within k * sigma(z).  Reads `in`, writes `out`.
+struct grow_kernel {
+  image_view<const float> depth;
+  image_view<const std::uint16_t> in;
+  image_view<std::uint16_t> out;
+  projector proj;
+  noise_sigma sigma;
+  float k;
+  const float* planes;
+  EDGEPLANE_HD void operator()(std::int64_t i) const {
+    const int x = static_cast<int>(i % in.width), y = static_cast<int>(i / in.width);
+    const std::uint16_t cur = in(x, y);
+    const float z = depth(x, y);
+    if (cur != 0 || !(z > 0.f)) {
+      out(x, y) = cur;
+      return;
+    }
+    const point3 p = proj(x, y, z);
+    const float tol = k * sigma(z);
+    std::uint16_t best = 0;
+    float best_d = tol;
+    const int nx[4] = {x - 1, x + 1, x, x};
+    const int ny[4] = {y, y, y - 1, y + 1};
+    for (int j = 0; j < 4; ++j) {
+      if (!in.contains(nx[j], ny[j])) continue;
+      const std::uint16_t l = in(nx[j], ny[j]);
+      if (l == 0 || l == best) continue;
+      const float* q = planes + 4 * l;
+      const float d = fabsf(q[0] * p.x + q[1] * p.y + q[2] * p.z + q[3]);
+      if (d <= best_d && (d < best_d || best == 0 || l < best)) {
+        best_d = d;
+        best = l;
+      }
+    }
+    out(x, y) = best;
+  }
+};
+
+/// Label closing, dilation half: an unlabelled pixel takes the smallest label in its window.
+struct label_dilate_kernel {
+  image_view<const std::uint16_t> in;
+  image_view<std::uint16_t> out;
+  int r;
+  EDGEPLANE_HD void operator()(std::int64_t i) const {
+    const int x = static_cast<int>(i % in.width), y = static_cast<int>(i / in.width);
+    std::uint16_t v = in(x, y);
+    if (v == 0) {
+      for (int dy = -r; dy <= r; ++dy)
+        for (int dx = -r; dx <= r; ++dx)
+          if (in.contains(x + dx, y + dy)) {
+            const std::uint16_t l = in(x + dx, y + dy);
+            if (l != 0 && (v == 0 || l < v)) v = l;
+          }
+    }
+    out(x, y) = v;
+  }
+};
+
+/// Label closing, erosion half: a pixel filled by the dilation keeps its label only if every
+/// pixel of its window is labelled in the dilated image; original labels are kept.
+struct label_erode_kernel {
+  image_view<const std::uint16_t> original;
+  image_view<const std::uint16_t> dilated;
+  image_view<std::uint16_t> out;
+  int r;
+  EDGEPLANE_HD void operator()(std::int64_t i) const {
+    const int x = static_cast<int>(i % out.width), y = static_cast<int>(i / out.width);
+    const std::uint16_t o = original(x, y);
+    if (o != 0) {
+      out(x, y) = o;
+      return;
+    }
+    std::uint16_t v = dilated(x, y);
+    for (int dy = -r; dy <= r && v; ++dy)
+      for (int dx = -r; dx <= r; ++dx)
+        if (dilated.contains(x + dx, y + dy) && dilated(x + dx, y + dy) == 0) {
+          v = 0;
+          break;
+        }
+    out(x, y) = v;
+  }
+};
+
+/// Nearest-neighbour 2x upsampling (odd last rows/columns repeat the last source pixel).
+struct upsample_kernel {
+  image_view<const std::uint16_t> in;
+  image_view<std::uint16_t> out;
+  EDGEPLANE_HD void operator()(std::int64_t i) const {
+    const int x = static_cast<int>(i % out.width), y = static_cast<int>(i / out.width);
+    int sx = x / 2, sy = y / 2;
+    sx = sx < in.width ? sx : in.width - 1;
+    sy = sy < in.height ? sy : in.height - 1;
+    out(x, y) = (in.width > 0 && in.height > 0) ? in(sx, sy) : std::uint16_t(0);
+  }
+};
+
+}  // namespace edgeplane::detail

@@ -1,0 +1,151 @@
+// edgeplane: lock-free parallel union-find (ECL-CC: Jaiganesh and Burtscher, HPDC 2018), written
+// once for host threads and CUDA devices.
+//
+// parent[i] == -1: element i takes no part; parent[i] == i: i is a root.  unite() hooks the larger
+// of two roots onto the smaller with a compare-and-swap, so parents only ever decrease and every
+// component ends up rooted at its smallest element, whatever the order of the unions: the result
+// is deterministic across threads and backends.
+//
+// Why the races are harmless:
+// - find() halves paths with plain (relaxed atomic) stores of a grandparent into parent[x].  Any
+//   value stored there is an ancestor of x at some moment, and ancestors stay in x's set, so the
+//   store never changes which set x is in; a lost update only leaves a longer path.
+// - unite() changes a root only by CAS(parent[r], r, s) with s < r.  If another thread hooked r
+//   first, the CAS fails and the loop retries from the new root; no hook is lost, and since every
+//   hook points to a smaller index, no cycle can form.
+// - flatten() runs after all unions (a separate launch), when parents no longer change.
+#pragma once
+#include <cstdint>
+
+#include "edgeplane/backend/atomic.hpp"
+#include "edgeplane/config.hpp"
+#include "edgeplane/image.hpp"
+
+namespace edgeplane {
+namespace detail {
+
+EDGEPLANE_HD inline std::int32_t uf_find(std::int32_t* parent, std::int32_t x) {
+  std::int32_t p = atomic_load(parent + x);
+  while (p != x) {
+    const std::int32_t gp = atomic_load(parent + p);
+    if (gp != p) atomic_store(parent + x, gp);  // path halving
+    x = p;
+    p = gp;
+  }
+  return x;
+}
+
+EDGEPLANE_HD inline void uf_unite(std::int32_t* parent, std::int32_t a, std::int32_t b) {
+  a = uf_find(parent, a);
+  b = uf_find(parent, b);
+  while (a != b) {
+    if (a < b) {
+      const std::int32_t t = a;
+      a = b;
+      b = t;
+    }
+    // hook the larger root a onto the smaller b
+    const std::int32_t old = atomic_cas(parent + a, a, b);
+    if (old == a) return;
+    a = uf_find(parent, old);
+    b = uf_find(parent, b);
+  }
+}
+
+/// parent[i] = active(i) ? i : -1.
+template <class Active>
+struct uf_init_kernel {
+  Active active;
+  std::int32_t* parent;
+  EDGEPLANE_HD void operator()(std::int64_t i) const {
+    parent[i] = active(i) ? static_cast<std::int32_t>(i) : -1;
+  }
+};
+
+/// For work item i, unites the pairs the adjacency policy names (at most 4).
+template <class Adjacency>
+struct uf_union_kernel {
+  Adjacency adj;
+  std::int32_t* parent;
+  EDGEPLANE_HD void operator()(std::int64_t i) const {
+    std::int32_t a[4], b[4];
+    const int n = adj(i, a, b);
+    for (int k = 0; k < n; ++k) uf_unite(parent, a[k], b[k]);
+  }
+};
+
+/// parent[i] = root of i (after all unions).
+struct uf_flatten_kernel {
+  std::int32_t* parent;
+  EDGEPLANE_HD void operator()(std::int64_t i) const {
+    if (parent[i] >= 0) parent[i] = uf_find(parent, static_cast<std::int32_t>(i));
+  }
+};
+
+/// Active elements: a nonzero byte in either of two masks (the two diagonal coverages).
+struct covered_active {
+  const std::uint8_t* a;
+  const std::uint8_t* b;
+  EDGEPLANE_HD bool operator()(std::int64_t i) const { return a[i] != 0 || (b != nullptr && b[i] != 0); }
+};
+
+/// Every element active.
+struct all_active {
+  EDGEPLANE_HD bool operator()(std::int64_t) const { return true; }
+};
+
+/// 4-connectivity on an image: pixel i is joined to its right and lower neighbours when both are
+/// active and their depths differ by no more than a jump edge allows (so a gap in the edge map
+/// does not join surfaces at different depths).
+struct grid4_adjacency {
+  image_view<const float> depth;
+  covered_active active;
+  float t_je, t_je_quad;
+  EDGEPLANE_HD bool compatible(float za, float zb) const {
+    const float z = za < zb ? za : zb;
+    return fabsf(za - zb) <= t_je + t_je_quad * z * z;
+  }
+  EDGEPLANE_HD int operator()(std::int64_t i, std::int32_t* a, std::int32_t* b) const {
+    if (!active(i)) return 0;
+    const int w = depth.width, x = static_cast<int>(i % w), y = static_cast<int>(i / w);
+    const float z = depth(x, y);
+    int n = 0;
+    if (x + 1 < w && active(i + 1) && compatible(z, depth(x + 1, y))) {
+      a[n] = static_cast<std::int32_t>(i);
+      b[n++] = static_cast<std::int32_t>(i + 1);
+    }
+    if (y + 1 < depth.height && active(i + w) && compatible(z, depth(x, y + 1))) {
+      a[n] = static_cast<std::int32_t>(i);
+      b[n++] = static_cast<std::int32_t>(i + w);
+    }
+    return n;
+  }
+};
+
+/// An explicit list of pairs: work item i unites first[i] and second[i].
+struct pair_list_adjacency {
+  const std::int32_t* first;
+  const std::int32_t* second;
+  EDGEPLANE_HD int operator()(std::int64_t i, std::int32_t* a, std::int32_t* b) const {
+    a[0] = first[i];
+    b[0] = second[i];
+    return 1;
+  }
+};
+
+}  // namespace detail
+
+/// Connected components with the lock-free union-find: `parent` (n elements, backend memory) ends
+/// with each active element's root, the smallest element of its component, and -1 for inactive
+/// ones.  `work_items` is the number of adjacency work items.  Synchronous semantics between the
+/// three launches come from the backend's stream order.
+template <class Backend, class Active, class Adjacency>
+void connected_components(const Backend& b, std::int64_t n, Active active, std::int64_t work_items, Adjacency adj,
+                          std::int32_t* parent) {
+  detail::require(n >= 0 && n < (std::int64_t(1) << 31), "union-find supports up to 2^31 - 1 elements");
+  b.for_each_index(n, detail::uf_init_kernel<Active>{active, parent});
+  b.for_each_index(work_items, detail::uf_union_kernel<Adjacency>{adj, parent});
+  b.for_each_index(n, detail::uf_flatten_kernel{parent});
+}
+
+}  // namespace edgeplane

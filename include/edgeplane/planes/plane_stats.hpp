@@ -1,0 +1,168 @@
+// edgeplane: per-label statistics as reductions.  Moments are accumulated in 64-bit integers of a
+// fixed-point unit (0.1 mm): integer sums are exact whatever the order of the additions, so the
+// statistics, and every decision taken on them, are identical across threads and backends.
+#pragma once
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include "edgeplane/backend/atomic.hpp"
+#include "edgeplane/camera.hpp"
+#include "edgeplane/config.hpp"
+#include "edgeplane/detail/geometry.hpp"
+#include "edgeplane/image.hpp"
+
+namespace edgeplane {
+
+/// Per-label accumulator layout (backend memory): moment_slots uint64 per label, then 4 int32
+/// (bounding box min x, min y, max x, max y) per label in a separate array.
+inline constexpr int moment_slots = 11;  // points, x, y, z, xx, xy, xz, yy, yz, zz, labelled pixels
+inline constexpr double fixed_per_metre = 1e4;
+
+namespace detail {
+
+/// Labels from the union-find: element i belongs to candidate cand_index[root(i)] (1-based; 0 =
+/// none).
+struct candidate_labels {
+  const std::int32_t* parent;
+  const std::int32_t* cand_index;
+  EDGEPLANE_HD std::int32_t operator()(std::int64_t i) const {
+    const std::int32_t r = parent[i];
+    return r < 0 ? 0 : cand_index[r];
+  }
+};
+
+/// Labels from a label image (0 = none).
+struct image_labels {
+  image_view<const std::uint16_t> labels;
+  EDGEPLANE_HD std::int32_t operator()(std::int64_t i) const {
+    return labels(static_cast<int>(i % labels.width), static_cast<int>(i / labels.width));
+  }
+};
+
+/// One work item per row: accumulates the moments of consecutive pixels of one label locally and
+/// flushes them with atomic adds when the label changes (a row holds few runs, so few atomics).
+template <class Labels>
+struct moments_kernel {
+  image_view<const float> depth;
+  Labels label_of;
+  projector proj;
+  std::int32_t num_labels;
+  std::uint64_t* moments;  // (num_labels + 1) * moment_slots; slot block of label L at L * moment_slots
+  std::int32_t* bbox;      // (num_labels + 1) * 4
+
+  EDGEPLANE_HD void flush(std::int32_t l, const std::int64_t* s, int x0, int x1, int y) const {
+    if (l <= 0 || l > num_labels) return;
+    std::uint64_t* m = moments + static_cast<std::int64_t>(l) * moment_slots;
+    for (int k = 0; k < moment_slots; ++k)
+      if (s[k] != 0) atomic_add(m + k, static_cast<std::uint64_t>(s[k]));
+    std::int32_t* bb = bbox + static_cast<std::int64_t>(l) * 4;
+    atomic_min(bb + 0, x0);
+    atomic_min(bb + 1, y);
+    atomic_max(bb + 2, x1);
+    atomic_max(bb + 3, y);
+  }
+
+  EDGEPLANE_HD void operator()(std::int64_t row) const {
+    const int y = static_cast<int>(row), w = depth.width;
+    std::int64_t s[moment_slots] = {};
+    std::int32_t cur = 0;
+    int x0 = 0;
+    for (int x = 0; x < w; ++x) {
+      const std::int32_t l = label_of(static_cast<std::int64_t>(y) * w + x);
+      if (l != cur) {
+        flush(cur, s, x0, x - 1, y);
+        for (int k = 0; k < moment_slots; ++k) s[k] = 0;
+        cur = l;
+        x0 = x;
+      }
+      if (l <= 0) continue;
+      s[10] += 1;
+      const float z = depth(x, y);
+      if (!(z > 0.f)) continue;
+      const point3 p = proj(x, y, z);
+      const std::int64_t px = static_cast<std::int64_t>(llrint(static_cast<double>(p.x) * fixed_per_metre));
+      const std::int64_t py = static_cast<std::int64_t>(llrint(static_cast<double>(p.y) * fixed_per_metre));
+      const std::int64_t pz = static_cast<std::int64_t>(llrint(static_cast<double>(p.z) * fixed_per_metre));
+      s[0] += 1;
+      s[1] += px;
+      s[2] += py;
+      s[3] += pz;
+      s[4] += px * px;
+      s[5] += px * py;
+      s[6] += px * pz;
+      s[7] += py * py;
+      s[8] += py * pz;
+      s[9] += pz * pz;
+    }
+    flush(cur, s, x0, w - 1, y);
+  }
+};
+
+struct bbox_init_kernel {
+  std::int32_t* bbox;
+  EDGEPLANE_HD void operator()(std::int64_t i) const {
+    bbox[4 * i + 0] = 0x7fffffff;
+    bbox[4 * i + 1] = 0x7fffffff;
+    bbox[4 * i + 2] = -1;
+    bbox[4 * i + 3] = -1;
+  }
+};
+
+}  // namespace detail
+
+/// Least-squares plane of a set of points, from its moments.
+struct plane_fit {
+  std::int64_t points = 0;   ///< valid 3-D points
+  std::int64_t pixels = 0;   ///< labelled pixels (includes pixels without valid depth)
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();  ///< metres
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero();    ///< unit, pointing toward the camera
+  double d = 0;                                        ///< n . X + d = 0, d >= 0
+  Eigen::Vector3d eigenvalues = Eigen::Vector3d::Zero();  ///< l1 >= l2 >= l3 (m^2)
+  std::array<int, 4> bbox{0, 0, -1, -1};                  ///< min x, min y, max x, max y (pixels)
+};
+
+/// Fits the plane of one label from its moment block (host memory).
+inline plane_fit fit_plane(const std::uint64_t* m, const std::int32_t* bb = nullptr) {
+  plane_fit f;
+  auto v = [&](int k) { return static_cast<double>(static_cast<std::int64_t>(m[k])); };
+  f.points = static_cast<std::int64_t>(m[0]);
+  f.pixels = static_cast<std::int64_t>(m[10]);
+  if (bb) f.bbox = {bb[0], bb[1], bb[2], bb[3]};
+  if (f.points < 3) return f;
+  const double n = v(0), s = 1.0 / fixed_per_metre;
+  const Eigen::Vector3d mean(v(1) / n, v(2) / n, v(3) / n);
+  Eigen::Matrix3d c;
+  c(0, 0) = v(4) / n - mean.x() * mean.x();
+  c(0, 1) = c(1, 0) = v(5) / n - mean.x() * mean.y();
+  c(0, 2) = c(2, 0) = v(6) / n - mean.x() * mean.z();
+  c(1, 1) = v(7) / n - mean.y() * mean.y();
+  c(1, 2) = c(2, 1) = v(8) / n - mean.y() * mean.z();
+  c(2, 2) = v(9) / n - mean.z() * mean.z();
+  c *= s * s;
+  f.centroid = mean * s;
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(c);
+  // ascending eigenvalues
+  f.eigenvalues = Eigen::Vector3d(es.eigenvalues()(2), es.eigenvalues()(1), std::max(0.0, es.eigenvalues()(0)));
+  f.normal = es.eigenvectors().col(0).normalized();
+  if (f.normal.dot(f.centroid) > 0) f.normal = -f.normal;
+  f.d = -f.normal.dot(f.centroid);
+  return f;
+}
+
+/// Accumulates the moments and bounding boxes of labels 1..num_labels (label_of(i) gives pixel
+/// i's label) into backend buffers `moments` ((num_labels + 1) * moment_slots) and `bbox`
+/// ((num_labels + 1) * 4), which this call clears first.  Asynchronous on device backends.
+template <class Backend, class Labels>
+void accumulate_moments(const Backend& b, image_view<const float> depth, const intrinsics& k, Labels label_of,
+                        std::int32_t num_labels, std::uint64_t* moments, std::int32_t* bbox) {
+  b.memset(moments, 0, sizeof(std::uint64_t) * moment_slots * (num_labels + 1));
+  b.for_each_index(num_labels + 1, detail::bbox_init_kernel{bbox});
+  b.for_each_index(depth.height, detail::moments_kernel<Labels>{depth, label_of, detail::make_projector(k),
+                                                                num_labels, moments, bbox});
+}
+
+}  // namespace edgeplane

@@ -1,0 +1,79 @@
+// edgeplane: candidate validation and merging (the few small per-plane decisions; host code).
+#pragma once
+#include <cmath>
+#include <cstdint>
+#include <numeric>
+#include <vector>
+
+#include "edgeplane/detail/geometry.hpp"
+#include "edgeplane/params.hpp"
+#include "edgeplane/planes/plane_stats.hpp"
+
+namespace edgeplane {
+
+/// A candidate is a plane when it has at least t_size points, strictly ordered PCA eigenvalues
+/// l1 > l2 > l3 with l3/l1 < t_cu and l3/l2 < t_cu, and (when t_residual > 0) a residual
+/// sqrt(l3) below t_residual times the sensor noise at its mean depth.
+inline bool is_plane(const plane_fit& f, const params& p) {
+  if (f.points < p.t_size) return false;
+  const double l1 = f.eigenvalues(0), l2 = f.eigenvalues(1), l3 = f.eigenvalues(2);
+  if (!(l1 > l2 && l2 > l3) || !(l2 > 0)) return false;
+  if (!(l3 / l1 < p.t_cu && l3 / l2 < p.t_cu)) return false;
+  if (p.t_residual > 0) {
+    const double z = std::abs(f.centroid.z());
+    const double sigma = p.noise.sigma0 + p.noise.sigma2 * z * z;
+    if (!(std::sqrt(l3) < p.t_residual * sigma)) return false;
+  }
+  return true;
+}
+
+/// Two planes are merged when parallel (|n1 x n2| < t_par) and coplanar: both normals are
+/// perpendicular to the line joining the centroids (|n . u| < t_ps with u that line's direction).
+inline bool should_merge(const plane_fit& a, const plane_fit& b, const params& p) {
+  if (a.normal.cross(b.normal).norm() >= p.t_par) return false;
+  const Eigen::Vector3d u = b.centroid - a.centroid;
+  const double len = u.norm();
+  if (len <= 0) return true;
+  return std::abs(a.normal.dot(u)) / len < p.t_ps && std::abs(b.normal.dot(u)) / len < p.t_ps;
+}
+
+/// Merges plane fits: returns, for each input fit, the index of its group (0-based, groups are
+/// numbered by their first member); host union-find over the few candidates.  Only fits marked
+/// `keep` take part.
+inline std::vector<int> merge_groups(const std::vector<plane_fit>& fits, const std::vector<char>& keep,
+                                     const params& p) {
+  const int n = static_cast<int>(fits.size());
+  std::vector<int> parent(n);
+  std::iota(parent.begin(), parent.end(), 0);
+  auto find = [&](int x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  };
+  for (int i = 0; i < n; ++i) {
+    if (!keep[i]) continue;
+    for (int j = i + 1; j < n; ++j) {
+      if (!keep[j]) continue;
+      if (should_merge(fits[i], fits[j], p)) {
+        const int a = find(i), b = find(j);
+        if (a != b) parent[std::max(a, b)] = std::min(a, b);
+      }
+    }
+  }
+  std::vector<int> group(n, -1);
+  int next = 0;
+  std::vector<int> id(n, -1);
+  for (int i = 0; i < n; ++i) {
+    if (!keep[i]) continue;
+    const int r = find(i);
+    if (id[r] < 0) id[r] = next++;
+    group[i] = id[r];
+  }
+  return group;
+}
+
+/// Sums two moment blocks (host).
+inline void add_moments(std::uint64_t* into, const std::uint64_t* m) {
+  for (int k = 0; k < moment_slots; ++k) into[k] += m[k];
+}
+
+}  // namespace edgeplane

@@ -1,0 +1,380 @@
+// edgeplane: the reusable plane segmenter.  Owns its scratch memory (allocated on the first frame
+// and whenever a larger frame arrives; never per frame otherwise) and runs every stage on its
+// backend.
+#pragma once
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cstdint>
+#include <vector>
+
+#include "edgeplane/backend/buffer.hpp"
+#include "edgeplane/backend/cpu.hpp"
+#include "edgeplane/camera.hpp"
+#include "edgeplane/edges/detect_edges.hpp"
+#include "edgeplane/filters/depth.hpp"
+#include "edgeplane/image.hpp"
+#include "edgeplane/labels/label_ops.hpp"
+#include "edgeplane/labels/union_find.hpp"
+#include "edgeplane/params.hpp"
+#include "edgeplane/planes/plane_stats.hpp"
+#include "edgeplane/planes/validate.hpp"
+#include "edgeplane/segments/line_segments.hpp"
+
+namespace edgeplane {
+
+/// One segmented plane, in the camera frame (x right, y down, z forward), metres.
+struct plane {
+  std::uint16_t id = 0;                 ///< its value in the label image
+  std::array<float, 3> normal{};        ///< unit normal n, pointing toward the camera
+  float d = 0.f;                        ///< n . X + d = 0 (metres, d >= 0)
+  std::array<float, 3> centroid{};      ///< metres
+  std::int64_t pixels = 0;              ///< labelled pixels in the output label image
+  std::int64_t points = 0;              ///< of those, pixels with valid depth (used for the fit)
+  std::array<float, 3> eigenvalues{};   ///< PCA eigenvalues l1 >= l2 >= l3 (m^2); sqrt(l3) = RMS residual
+  std::array<int, 4> bbox{};            ///< min x, min y, max x, max y (pixels of the output image)
+};
+
+/// Per-stage wall-clock times of one frame in milliseconds (each stage synchronizes the backend).
+struct stage_times {
+  double preprocess = 0, edges = 0, segments = 0, candidates = 0, validation = 0, merge = 0, finalize = 0,
+         total = 0;
+};
+
+struct segmentation_result {
+  std::vector<plane> planes;
+  stage_times times;
+  int candidates = 0;        ///< connected groups of line segments of at least t_size pixels
+  int valid_candidates = 0;  ///< of those, the ones that passed validation
+};
+
+namespace detail {
+struct count_roots_kernel {
+  const std::int32_t* parent;
+  std::int32_t* count;
+  EDGEPLANE_HD void operator()(std::int64_t i) const {
+    const std::int32_t r = parent[i];
+    if (r >= 0) atomic_add(count + r, 1);
+  }
+};
+struct flag_candidates_kernel {
+  const std::int32_t* parent;
+  const std::int32_t* count;
+  std::int32_t t_size;
+  std::int32_t* flags;
+  EDGEPLANE_HD void operator()(std::int64_t i) const {
+    flags[i] = (parent[i] == static_cast<std::int32_t>(i) && count[i] >= t_size) ? 1 : 0;
+  }
+};
+struct index_candidates_kernel {  // scan[i] -> 1-based candidate index at roots, 0 elsewhere
+  const std::int32_t* flags;
+  std::int32_t* scan;
+  EDGEPLANE_HD void operator()(std::int64_t i) const { scan[i] = flags[i] ? scan[i] : 0; }
+};
+}  // namespace detail
+
+template <class Backend = cpu>
+class segmenter {
+ public:
+  explicit segmenter(params p = presets::thesis_full(), Backend b = Backend{}) : p_(p), b_(b) {
+    validate(p_);
+    rebind();
+  }
+
+  const params& parameters() const { return p_; }
+  /// Replaces the thresholds (validated; throws edgeplane::error).
+  void set_parameters(const params& p) {
+    validate(p);
+    p_ = p;
+  }
+  const Backend& backend() const { return b_; }
+
+  /// Segments a uint16 depth image (metres_per_unit: e.g. 0.001 for millimetres).  `depth` and
+  /// `labels` are HOST memory of the same size; labels receives 0 (no plane) or the plane id.
+  /// Synchronous.  Throws edgeplane::error on unusable arguments.
+  segmentation_result segment(image_view<const std::uint16_t> depth, float metres_per_unit, const intrinsics& k,
+                              image_view<std::uint16_t> labels) {
+    segmentation_result r;
+    segment(depth, metres_per_unit, k, labels, r);
+    return r;
+  }
+  /// Float depth in metres (0, NaN or infinity = invalid).
+  segmentation_result segment(image_view<const float> depth, const intrinsics& k, image_view<std::uint16_t> labels) {
+    segmentation_result r;
+    segment(depth, 1.f, k, labels, r);
+    return r;
+  }
+  /// As above, reusing `out` (its vector keeps its capacity: no allocation in steady state).
+  template <class In>
+  void segment(image_view<const In> depth, float scale, const intrinsics& k, image_view<std::uint16_t> labels,
+               segmentation_result& out) {
+    static_assert(std::is_same_v<In, std::uint16_t> || std::is_same_v<In, float>, "uint16 or float depth");
+    run(depth, scale, k, labels, out);
+  }
+
+  /// The edge map (edge_bits) and the closed edge mask of the last frame, at processing resolution,
+  /// in the backend's memory.
+  image_view<const std::uint8_t> edge_map() const { return view(edges_.data(), pw_, ph_); }
+  image_view<const std::uint8_t> edge_mask() const { return view(mask_.data(), pw_, ph_); }
+  /// Bytes of scratch memory held in the backend's memory.
+  std::size_t scratch_bytes() const {
+    return raw_in_.capacity_bytes() + z_a_.capacity_bytes() + z_b_.capacity_bytes() + z_c_.capacity_bytes() +
+           z_proc_.capacity_bytes() + edges_.capacity_bytes() + mask_.capacity_bytes() + cov_l_.capacity_bytes() +
+           cov_r_.capacity_bytes() + parent_.capacity_bytes() + count_.capacity_bytes() + flags_.capacity_bytes() +
+           scan_.capacity_bytes() + moments_.capacity_bytes() + bbox_.capacity_bytes() + table_.capacity_bytes() +
+           planes_.capacity_bytes() + lab_a_.capacity_bytes() + lab_b_.capacity_bytes() + lab_c_.capacity_bytes() +
+           lab_full_.capacity_bytes();
+  }
+
+ private:
+  template <class T>
+  static image_view<T> view(T* p, int w, int h) {
+    return image_view<T>{p, w, h, w};
+  }
+
+  void rebind() {
+    raw_in_.set_backend(b_);
+    z_a_.set_backend(b_);
+    z_b_.set_backend(b_);
+    z_c_.set_backend(b_);
+    z_proc_.set_backend(b_);
+    edges_.set_backend(b_);
+    mask_.set_backend(b_);
+    cov_l_.set_backend(b_);
+    cov_r_.set_backend(b_);
+    parent_.set_backend(b_);
+    count_.set_backend(b_);
+    flags_.set_backend(b_);
+    scan_.set_backend(b_);
+    moments_.set_backend(b_);
+    bbox_.set_backend(b_);
+    table_.set_backend(b_);
+    planes_.set_backend(b_);
+    lab_a_.set_backend(b_);
+    lab_b_.set_backend(b_);
+    lab_c_.set_backend(b_);
+    lab_full_.set_backend(b_);
+  }
+
+  using clock = std::chrono::steady_clock;
+  static double ms_since(clock::time_point& t) {
+    const auto now = clock::now();
+    const double ms = std::chrono::duration<double, std::milli>(now - t).count();
+    t = now;
+    return ms;
+  }
+
+  // Downloads the moment blocks of labels 1..n and fits each (host).
+  void download_fits(std::int32_t n, std::vector<plane_fit>& fits) {
+    host_moments_.resize(static_cast<std::size_t>(n + 1) * moment_slots);
+    host_bbox_.resize(static_cast<std::size_t>(n + 1) * 4);
+    b_.copy_to_host(host_moments_.data(), moments_.data(), host_moments_.size() * sizeof(std::uint64_t));
+    b_.copy_to_host(host_bbox_.data(), bbox_.data(), host_bbox_.size() * sizeof(std::int32_t));
+    fits.resize(static_cast<std::size_t>(n));
+    for (std::int32_t c = 1; c <= n; ++c)
+      fits[c - 1] = fit_plane(host_moments_.data() + static_cast<std::size_t>(c) * moment_slots,
+                              host_bbox_.data() + static_cast<std::size_t>(c) * 4);
+  }
+
+  template <class In>
+  void run(image_view<const In> depth_in, float scale, const intrinsics& k, image_view<std::uint16_t> labels_out,
+           segmentation_result& out) {
+    auto t0 = clock::now(), t = t0;
+    out.planes.clear();
+    out.times = {};
+    out.candidates = out.valid_candidates = 0;
+    detail::check_view(depth_in, "depth");
+    detail::check_view(labels_out, "labels");
+    detail::check_same_size(depth_in, labels_out, "depth", "labels");
+    detail::check_intrinsics(k);
+    detail::require(std::isfinite(scale) && scale > 0.f,
+                    "depth scale must be positive and finite (got " + std::to_string(scale) + ")");
+    const int w = depth_in.width, h = depth_in.height;
+    detail::require(static_cast<std::int64_t>(w) * h < (std::int64_t(1) << 31), "image too large");
+    if (w == 0 || h == 0) return;
+    const std::int64_t n_full = static_cast<std::int64_t>(w) * h;
+
+    // ---- 1. preprocessing ----------------------------------------------------------------------
+    const bool down = p_.downscale && w >= 2 && h >= 2;
+    pw_ = down ? w / 2 : w;
+    ph_ = down ? h / 2 : h;
+    const std::int64_t n = static_cast<std::int64_t>(pw_) * ph_;
+    const intrinsics kp = down ? scaled(k, 2) : k;
+    z_a_.resize(n_full);
+    z_b_.resize(n_full);
+    z_c_.resize(n_full);
+    image_view<const In> src = depth_in;
+    if constexpr (!Backend::host_accessible) {
+      raw_in_.resize(n_full * sizeof(In));
+      In* dst = reinterpret_cast<In*>(raw_in_.data());
+      for (int y = 0; y < h; ++y)
+        b_.copy_from_host(dst + static_cast<std::int64_t>(y) * w, &depth_in(0, y), sizeof(In) * w);
+      src = image_view<const In>{dst, w, h, w};
+    }
+    const auto za = view(z_a_.data(), w, h), zb = view(z_b_.data(), w, h), zc = view(z_c_.data(), w, h);
+    convert_depth(b_, src, scale, p_.min_depth, p_.max_depth, za);
+    image_view<float> z_full = za;
+    if (p_.depth_closing_radius > 0) {
+      close_depth(b_, za, zb, zc, p_.depth_closing_radius);
+      z_full = zc;
+    }
+    image_view<float> z = z_full;
+    if (down) {
+      z_proc_.resize(n);
+      z = view(z_proc_.data(), pw_, ph_);
+      downscale_depth(b_, z_full, z);
+    }
+    b_.synchronize();
+    out.times.preprocess = ms_since(t);
+
+    // ---- 2. edges ------------------------------------------------------------------------------
+    edges_.resize(n);
+    mask_.resize(n);
+    cov_l_.resize(n);
+    const auto edges = view(edges_.data(), pw_, ph_), mask = view(mask_.data(), pw_, ph_),
+               scratch8 = view(cov_l_.data(), pw_, ph_);
+    detect_edges(b_, z, kp, p_, edges);
+    close_edges(b_, edges, scratch8, mask, p_.edge_closing_radius);
+    b_.synchronize();
+    out.times.edges = ms_since(t);
+
+    // ---- 3. line segments ----------------------------------------------------------------------
+    cov_r_.resize(n);
+    const auto cov_l = view(cov_l_.data(), pw_, ph_), cov_r = view(cov_r_.data(), pw_, ph_);
+    extract_segments<direction::left_diagonal>(b_, z, mask, kp, p_, cov_l);
+    extract_segments<direction::right_diagonal>(b_, z, mask, kp, p_, cov_r);
+    b_.synchronize();
+    out.times.segments = ms_since(t);
+
+    // ---- 4. candidates: union-find of touching and crossing runs --------------------------------
+    parent_.resize(n);
+    count_.resize(n);
+    flags_.resize(n);
+    scan_.resize(n);
+    const detail::covered_active active{cov_l_.data(), cov_r_.data()};
+    connected_components(b_, n, active, n, detail::grid4_adjacency{z, active, p_.t_je, p_.t_je_quad},
+                         parent_.data());
+    b_.memset(count_.data(), 0, sizeof(std::int32_t) * n);
+    b_.for_each_index(n, detail::count_roots_kernel{parent_.data(), count_.data()});
+    b_.for_each_index(n, detail::flag_candidates_kernel{parent_.data(), count_.data(), p_.t_size, flags_.data()});
+    b_.inclusive_scan(flags_.data(), n, scan_.data());
+    std::int32_t num_cand = 0;  // the scan's last element is the number of candidates
+    b_.copy_to_host(&num_cand, scan_.data() + (n - 1), sizeof(std::int32_t));
+    b_.for_each_index(n, detail::index_candidates_kernel{flags_.data(), scan_.data()});
+    out.candidates = num_cand;
+    b_.synchronize();
+    out.times.candidates = ms_since(t);
+
+    // ---- 5. validation -------------------------------------------------------------------------
+    moments_.resize(static_cast<std::size_t>(num_cand + 1) * moment_slots);
+    bbox_.resize(static_cast<std::size_t>(num_cand + 1) * 4);
+    accumulate_moments(b_, z, kp, detail::candidate_labels{parent_.data(), scan_.data()}, num_cand,
+                       moments_.data(), bbox_.data());
+    download_fits(num_cand, fits_);
+    keep_.assign(fits_.size(), 0);
+    for (std::size_t c = 0; c < fits_.size(); ++c) keep_[c] = is_plane(fits_[c], p_) ? 1 : 0;
+    out.valid_candidates = static_cast<int>(std::count(keep_.begin(), keep_.end(), 1));
+    out.times.validation = ms_since(t);
+
+    // ---- 6. merging ----------------------------------------------------------------------------
+    const std::vector<int> group = merge_groups(fits_, keep_, p_);
+    int num_planes = 0;
+    for (int g : group) num_planes = std::max(num_planes, g + 1);
+    num_planes = std::min(num_planes, 65535);
+    host_table_.assign(static_cast<std::size_t>(num_cand + 1), 0);
+    group_moments_.assign(static_cast<std::size_t>(num_planes + 1) * moment_slots, 0);
+    for (int c = 0; c < num_cand; ++c) {
+      if (group[c] < 0 || group[c] >= num_planes) continue;
+      host_table_[c + 1] = static_cast<std::uint16_t>(group[c] + 1);
+      add_moments(group_moments_.data() + static_cast<std::size_t>(group[c] + 1) * moment_slots,
+                  host_moments_.data() + static_cast<std::size_t>(c + 1) * moment_slots);
+    }
+    host_planes_.assign(static_cast<std::size_t>(num_planes + 1) * 4, 0.f);
+    for (int g = 1; g <= num_planes; ++g) {
+      const plane_fit f = fit_plane(group_moments_.data() + static_cast<std::size_t>(g) * moment_slots);
+      for (int j = 0; j < 3; ++j) host_planes_[4 * g + j] = static_cast<float>(f.normal(j));
+      host_planes_[4 * g + 3] = static_cast<float>(f.d);
+    }
+    table_.resize(host_table_.size());
+    planes_.resize(host_planes_.size());
+    b_.copy_from_host(table_.data(), host_table_.data(), host_table_.size() * sizeof(std::uint16_t));
+    b_.copy_from_host(planes_.data(), host_planes_.data(), host_planes_.size() * sizeof(float));
+    b_.synchronize();
+    out.times.merge = ms_since(t);
+
+    // ---- 7. final labels: relabel, plane-guided growth, closing, upsampling ---------------------
+    lab_a_.resize(n);
+    lab_b_.resize(n);
+    auto la = view(lab_a_.data(), pw_, ph_), lb = view(lab_b_.data(), pw_, ph_);
+    b_.for_each_index(n, detail::relabel_kernel<detail::candidate_labels>{
+                             detail::candidate_labels{parent_.data(), scan_.data()}, table_.data(), la});
+    const detail::projector proj = detail::make_projector(kp);
+    const detail::noise_sigma sigma = detail::make_noise(p_.noise);
+    for (int it = 0; it < p_.grow_iterations && num_planes > 0; ++it) {
+      b_.for_each_index(n, detail::grow_kernel{z, la, lb, proj, sigma, p_.grow_k, planes_.data()});
+      std::swap(la, lb);
+    }
+    if (p_.label_closing_radius > 0 && num_planes > 0) {
+      b_.for_each_index(n, detail::label_dilate_kernel{la, lb, p_.label_closing_radius});
+      lab_c_.resize(n);
+      auto lc = view(lab_c_.data(), pw_, ph_);
+      b_.for_each_index(n, detail::label_erode_kernel{la, lb, lc, p_.label_closing_radius});
+      std::swap(la, lc);
+    }
+    image_view<std::uint16_t> final_labels = la;
+    if (down) {
+      lab_full_.resize(n_full);
+      final_labels = view(lab_full_.data(), w, h);
+      b_.for_each_index(n_full, detail::upsample_kernel{la, final_labels});
+    }
+    // final statistics at output resolution
+    moments_.resize(static_cast<std::size_t>(num_planes + 1) * moment_slots);
+    bbox_.resize(static_cast<std::size_t>(num_planes + 1) * 4);
+    accumulate_moments(b_, image_view<const float>(z_full), k, detail::image_labels{final_labels}, num_planes,
+                       moments_.data(), bbox_.data());
+    download_fits(num_planes, fits_);
+    for (int g = 1; g <= num_planes; ++g) {
+      const plane_fit& f = fits_[g - 1];
+      plane pl;
+      pl.id = static_cast<std::uint16_t>(g);
+      for (int j = 0; j < 3; ++j) {
+        pl.normal[j] = static_cast<float>(f.normal(j));
+        pl.centroid[j] = static_cast<float>(f.centroid(j));
+        pl.eigenvalues[j] = static_cast<float>(f.eigenvalues(j));
+      }
+      pl.d = static_cast<float>(f.d);
+      pl.pixels = f.pixels;
+      pl.points = f.points;
+      pl.bbox = f.bbox;
+      out.planes.push_back(pl);
+    }
+    for (int y = 0; y < h; ++y)
+      b_.copy_to_host(&labels_out(0, y), final_labels.data + static_cast<std::int64_t>(y) * w,
+                      sizeof(std::uint16_t) * w);
+    b_.synchronize();
+    out.times.finalize = ms_since(t);
+    out.times.total = std::chrono::duration<double, std::milli>(clock::now() - t0).count();
+  }
+
+  params p_;
+  Backend b_;
+  int pw_ = 0, ph_ = 0;
+  buffer<unsigned char, Backend> raw_in_;
+  buffer<float, Backend> z_a_, z_b_, z_c_, z_proc_;
+  buffer<std::uint8_t, Backend> edges_, mask_, cov_l_, cov_r_;
+  buffer<std::int32_t, Backend> parent_, count_, flags_, scan_;
+  buffer<std::uint64_t, Backend> moments_;
+  buffer<std::int32_t, Backend> bbox_;
+  buffer<std::uint16_t, Backend> table_;
+  buffer<float, Backend> planes_;
+  buffer<std::uint16_t, Backend> lab_a_, lab_b_, lab_c_, lab_full_;
+  // host scratch, reused across frames
+  std::vector<std::uint64_t> host_moments_, group_moments_;
+  std::vector<std::int32_t> host_bbox_;
+  std::vector<plane_fit> fits_;
+  std::vector<char> keep_;
+  std::vector<std::uint16_t> host_table_;
+  std::vector<float> host_planes_;
+};
+
+}  // namespace edgeplane

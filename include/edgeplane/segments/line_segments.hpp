@@ -1,0 +1,150 @@
+// edgeplane: plane-candidate line segments.  One work item walks one diagonal of the image and
+// keeps the runs of non-edge pixels that are longer than t_length and straight in 3-D.
+#pragma once
+#include <cstdint>
+
+#include "edgeplane/camera.hpp"
+#include "edgeplane/config.hpp"
+#include "edgeplane/detail/geometry.hpp"
+#include "edgeplane/edges/directions.hpp"
+#include "edgeplane/image.hpp"
+#include "edgeplane/params.hpp"
+
+namespace edgeplane {
+namespace detail {
+
+/// Number of diagonals of a w x h image along a diagonal direction.
+EDGEPLANE_HD inline std::int64_t diagonal_count(int w, int h) { return w > 0 && h > 0 ? std::int64_t(w) + h - 1 : 0; }
+
+/// First pixel (top row or outer column) of diagonal k along Direction (dy = 1, dx = +-1).
+template <class Direction>
+EDGEPLANE_HD inline void diagonal_start(int w, int h, std::int64_t k, int& x, int& y) {
+  static_assert(Direction::dy == 1 && (Direction::dx == 1 || Direction::dx == -1), "diagonal directions only");
+  if constexpr (Direction::dx == 1) {  // k = x - y + (h - 1)
+    const int kk = static_cast<int>(k);
+    x = kk - (h - 1) > 0 ? kk - (h - 1) : 0;
+    y = (h - 1) - kk > 0 ? (h - 1) - kk : 0;
+  } else {  // k = x + y
+    const int kk = static_cast<int>(k);
+    x = kk < w - 1 ? kk : w - 1;
+    y = kk - x;
+  }
+}
+
+/// The straightness test of one run: every point within t_line * chord + noise_k * sigma(z) of
+/// the chord from the run's first to its last point.  Returns the index (0..len-1) of the worst
+/// point, or -1 when the run passes.
+struct line_test {
+  float t_line, noise_k;
+  noise_sigma sigma;
+  template <class Direction>
+  EDGEPLANE_HD int operator()(image_view<const float> depth, projector proj, int x0, int y0, int len,
+                              Direction) const {
+    const int x1 = x0 + (len - 1) * Direction::dx, y1 = y0 + (len - 1) * Direction::dy;
+    const point3 a = proj(x0, y0, depth(x0, y0)), b = proj(x1, y1, depth(x1, y1));
+    const float chord = norm(b - a);
+    int worst = -1;
+    float worst_excess = 0.f;
+    for (int k = 1; k < len - 1; ++k) {
+      const int x = x0 + k * Direction::dx, y = y0 + k * Direction::dy;
+      const float z = depth(x, y);
+      const float tol = t_line * chord + noise_k * sigma(z);
+      const float d = sqrtf(dist2_to_line(proj(x, y, z), a, b));
+      if (d - tol > worst_excess) {
+        worst_excess = d - tol;
+        worst = k;
+      }
+    }
+    return worst;
+  }
+};
+
+/// Walks diagonal i; marks covered(x, y) = 1 on every pixel of every kept run.  A run that fails
+/// the line test is split at its worst point (that point dropped) and both parts are tested again
+/// (at most `max_splits` times per run), so one undetected crease does not lose a whole run.
+template <class Direction>
+struct diagonal_runs_kernel {
+  image_view<const float> depth;
+  image_view<const std::uint8_t> mask;  // 1 = edge or invalid
+  image_view<std::uint8_t> covered;
+  projector proj;
+  int t_length;
+  int max_splits;
+  line_test test;
+
+  EDGEPLANE_HD void keep(int x0, int y0, int len) const {
+    for (int k = 0; k < len; ++k) covered(x0 + k * Direction::dx, y0 + k * Direction::dy) = 1;
+  }
+
+  EDGEPLANE_HD void process(int x0, int y0, int len) const {
+    constexpr int stack_size = 16;
+    int sx[stack_size], sy[stack_size], sl[stack_size];
+    int top = 0, splits = 0;
+    sx[top] = x0;
+    sy[top] = y0;
+    sl[top] = len;
+    ++top;
+    while (top > 0) {
+      --top;
+      const int ax = sx[top], ay = sy[top], al = sl[top];
+      if (al <= t_length) continue;
+      const int w = test(depth, proj, ax, ay, al, Direction{});
+      if (w < 0) {
+        keep(ax, ay, al);
+        continue;
+      }
+      if (splits >= max_splits || top + 2 > stack_size) continue;
+      ++splits;
+      sx[top] = ax;
+      sy[top] = ay;
+      sl[top] = w;
+      ++top;
+      sx[top] = ax + (w + 1) * Direction::dx;
+      sy[top] = ay + (w + 1) * Direction::dy;
+      sl[top] = al - w - 1;
+      ++top;
+    }
+  }
+
+  EDGEPLANE_HD void operator()(std::int64_t i) const {
+    int x, y;
+    diagonal_start<Direction>(depth.width, depth.height, i, x, y);
+    int rx = 0, ry = 0, len = 0;
+    while (depth.contains(x, y)) {
+      const std::uint8_t m = mask(x, y);
+      covered(x, y) = 0;
+      if (m == 0) {
+        if (len == 0) {
+          rx = x;
+          ry = y;
+        }
+        ++len;
+      } else if (len > 0) {
+        process(rx, ry, len);
+        len = 0;
+      }
+      x += Direction::dx;
+      y += Direction::dy;
+    }
+    if (len > 0) process(rx, ry, len);
+  }
+};
+
+}  // namespace detail
+
+/// Extracts the kept diagonal runs along Direction (direction::left_diagonal or right_diagonal):
+/// `covered` becomes 1 on their pixels, 0 elsewhere.  `mask` is the closed edge map (1 = edge or
+/// invalid).  Views in the backend's memory; asynchronous on device backends.
+template <class Direction, class Backend>
+void extract_segments(const Backend& b, image_view<const float> depth, image_view<const std::uint8_t> mask,
+                      const intrinsics& k, const params& p, image_view<std::uint8_t> covered) {
+  detail::check_intrinsics(k);
+  detail::check_same_size(depth, mask, "depth", "edge mask");
+  detail::check_same_size(depth, covered, "depth", "covered");
+  detail::diagonal_runs_kernel<Direction> f{depth,    mask, covered, detail::make_projector(k), p.t_length,
+                                            p.max_run_splits,
+                                            detail::line_test{p.t_line, p.noise_k, detail::make_noise(p.noise)}};
+  b.for_each_index(detail::diagonal_count(depth.width, depth.height), f);
+}
+
+}  // namespace edgeplane
