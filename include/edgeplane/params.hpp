@@ -29,11 +29,15 @@ struct params {
   float max_depth = 20.f;        ///< metres; larger depths are invalid
 
   noise_model noise{};
+  int smooth_radius = 2;     ///< edge-preserving smoothing window half-size (pixels); 0 = off
+  float smooth_k = 2.5f;     ///< smoothing averages neighbours within smooth_k * sigma(z) of the centre
 
   // ---- 2. edges --------------------------------------------------------------------------------
   bool use_jump = true;
   float t_je = 0.06f;        ///< jump edge: |z(neighbour) - z(c)| > t_je + t_je_quad * z^2 (metres)
   float t_je_quad = 0.0f;    ///< depth-squared part of the jump threshold (1/metre)
+  float t_je_ratio = 1.5f;   ///< a jump must also exceed this many times the step on the other side (0 = thesis)
+  float adjacency_slope = 10.f;  ///< touching run pixels join when |dz| <= jump threshold + this * z / f (pixel footprints)
   bool use_extrema = true;
   float t_ee = 0.98f;        ///< extrema edge: c nearer than all neighbours by a factor t_ee, or farther by 1/t_ee
   int n_ee = 4;              ///< neighbours per side for extrema edges
@@ -57,6 +61,8 @@ struct params {
   int t_size = 1000;         ///< minimum candidate size in pixels (processing resolution)
   float t_cu = 0.0325f;      ///< curvature: l3/l1 < t_cu and l3/l2 < t_cu
   float t_residual = 3.0f;   ///< sqrt(l3) must be below t_residual * sigma(mean z); <= 0 disables
+  int split_rounds = 2;      ///< a candidate failing validation is eroded and re-split this many times (0 = drop it)
+  int split_erode = 2;       ///< erosion radius (pixels) added per split round
 
   // ---- 5. merging and final labels -------------------------------------------------------------
   float t_par = 0.03f;       ///< parallel: |n1 x n2| < t_par
@@ -75,10 +81,14 @@ inline void validate(const params& p) {
   chk(p.depth_closing_radius >= 0 && p.depth_closing_radius <= 8, "depth_closing_radius", p.depth_closing_radius);
   chk(fin(p.min_depth) && p.min_depth >= 0.f, "min_depth", p.min_depth);
   chk(fin(p.max_depth) && p.max_depth > p.min_depth && p.max_depth <= 1000.f, "max_depth", p.max_depth);
+  chk(p.smooth_radius >= 0 && p.smooth_radius <= 8, "smooth_radius", p.smooth_radius);
+  chk(fin(p.smooth_k) && p.smooth_k >= 0.f, "smooth_k", p.smooth_k);
   chk(fin(p.noise.sigma0) && p.noise.sigma0 >= 0.f, "noise.sigma0", p.noise.sigma0);
   chk(fin(p.noise.sigma2) && p.noise.sigma2 >= 0.f, "noise.sigma2", p.noise.sigma2);
   chk(fin(p.t_je) && p.t_je > 0.f, "t_je", p.t_je);
   chk(fin(p.t_je_quad) && p.t_je_quad >= 0.f, "t_je_quad", p.t_je_quad);
+  chk(fin(p.t_je_ratio) && p.t_je_ratio >= 0.f, "t_je_ratio", p.t_je_ratio);
+  chk(fin(p.adjacency_slope) && p.adjacency_slope >= 0.f, "adjacency_slope", p.adjacency_slope);
   chk(fin(p.t_ee) && p.t_ee > 0.f && p.t_ee < 1.f, "t_ee", p.t_ee);
   chk(p.n_ee >= 1 && p.n_ee <= 16, "n_ee", p.n_ee);
   chk(fin(p.t_coe) && p.t_coe > 0.f, "t_coe", p.t_coe);
@@ -95,6 +105,8 @@ inline void validate(const params& p) {
   chk(p.t_size >= 3, "t_size", p.t_size);
   chk(fin(p.t_cu) && p.t_cu > 0.f, "t_cu", p.t_cu);
   chk(fin(p.t_residual), "t_residual", p.t_residual);
+  chk(p.split_rounds >= 0 && p.split_rounds <= 8, "split_rounds", p.split_rounds);
+  chk(p.split_erode >= 1 && p.split_erode <= 16, "split_erode", p.split_erode);
   chk(fin(p.t_par) && p.t_par >= 0.f, "t_par", p.t_par);
   chk(fin(p.t_ps) && p.t_ps >= 0.f, "t_ps", p.t_ps);
   chk(p.grow_iterations >= 0 && p.grow_iterations <= 256, "grow_iterations", p.grow_iterations);
@@ -111,6 +123,7 @@ inline params thesis_full() { return params{}; }
 inline params thesis_half() {
   params p;
   p.downscale = true;
+  p.noise_k = 1.0f;  // the 2x2 averaging of the downscale halves the noise
   p.n_ee = 2;
   p.n_coe = 8;
   p.n_cue = 4;
@@ -129,8 +142,50 @@ inline params kinect360() {
   return p;
 }
 
+/// Kinect for Xbox One / Azure-Kinect-class time-of-flight at 512x424.  Noise model measured on
+/// the kinect2 development scenes (robust sigma 5.4 mm at 0.75 m to 8.8 mm at 4.25 m); thresholds
+/// tuned there (README "Method", "Tuning").
+inline params kinect2() {
+  params p;
+  p.noise = {0.005f, 0.0002f};
+  p.smooth_radius = 1;
+  p.noise_k = 1.0f;
+  p.n_coe = 10;
+  p.t_length = 8;
+  p.t_size = 300;
+  p.t_ps = 0.08f;
+  p.split_rounds = 0;
+  return p;
+}
+
+/// Kinect for Xbox 360 structured light at 640x480: noise grows with z^2 (measured on the kinect1
+/// development scenes: 2 mm at 0.75 m, 28 mm at 3.75 m), and so do the jump thresholds.
+inline params kinect1() {
+  params p = kinect2();
+  p.noise = {0.001f, 0.0019f};
+  p.t_je = 0.03f;
+  p.t_je_quad = 0.02f;
+  p.t_size = 400;
+  return p;
+}
+
+/// The ABW structured-light range scanner of the SegComp set (512x512, nearly orthographic at about
+/// 1 m, depth quantised in 1.3 mm steps).
+inline params abw() {
+  params p;
+  p.noise = {0.0008f, 0.0f};
+  p.t_je = 0.01f;
+  p.t_size = 300;
+  p.t_length = 8;
+  p.n_coe = 8;
+  p.n_cue = 6;
+  return p;
+}
+
 /// Names accepted by preset().
-inline std::vector<std::string> preset_names() { return {"thesis_full", "thesis_half", "kinect360"}; }
+inline std::vector<std::string> preset_names() {
+  return {"thesis_full", "thesis_half", "kinect360", "kinect2", "kinect1", "abw"};
+}
 
 }  // namespace presets
 
@@ -139,6 +194,9 @@ inline params preset(std::string_view name) {
   if (name == "thesis_full") return presets::thesis_full();
   if (name == "thesis_half") return presets::thesis_half();
   if (name == "kinect360") return presets::kinect360();
+  if (name == "kinect2") return presets::kinect2();
+  if (name == "kinect1") return presets::kinect1();
+  if (name == "abw") return presets::abw();
   std::string known;
   for (const auto& n : presets::preset_names()) known += (known.empty() ? "" : ", ") + n;
   detail::fail("unknown preset '" + std::string(name) + "' (known: " + known + ")");

@@ -44,7 +44,8 @@ struct stage_times {
 struct segmentation_result {
   std::vector<plane> planes;
   stage_times times;
-  int candidates = 0;        ///< connected groups of line segments of at least t_size pixels
+  int candidates = 0;        ///< connected groups of line segments of at least t_size pixels, including
+                             ///< the pieces of failed candidates split during validation
   int valid_candidates = 0;  ///< of those, the ones that passed validation
 };
 
@@ -66,10 +67,24 @@ struct flag_candidates_kernel {
     flags[i] = (parent[i] == static_cast<std::int32_t>(i) && count[i] >= t_size) ? 1 : 0;
   }
 };
-struct index_candidates_kernel {  // scan[i] -> 1-based candidate index at roots, 0 elsewhere
+/// cand[i] = offset + (1-based index of i's root among the kept roots) for pixels of kept
+/// components; pixels of dropped components get 0; pixels that took no part get 0, or keep their
+/// value when `only_members` (a split round rewrites only the pixels it split).
+struct write_candidates_kernel {
+  const std::int32_t* parent;
   const std::int32_t* flags;
-  std::int32_t* scan;
-  EDGEPLANE_HD void operator()(std::int64_t i) const { scan[i] = flags[i] ? scan[i] : 0; }
+  const std::int32_t* scan;
+  std::int32_t offset;
+  bool only_members;
+  std::int32_t* cand;
+  EDGEPLANE_HD void operator()(std::int64_t i) const {
+    const std::int32_t r = parent[i];
+    if (r >= 0 && flags[r]) {
+      cand[i] = offset + scan[r];
+    } else if (!only_members || r >= 0) {
+      cand[i] = 0;
+    }
+  }
 };
 }  // namespace detail
 
@@ -119,9 +134,9 @@ class segmenter {
   /// Bytes of scratch memory held in the backend's memory.
   std::size_t scratch_bytes() const {
     return raw_in_.capacity_bytes() + z_a_.capacity_bytes() + z_b_.capacity_bytes() + z_c_.capacity_bytes() +
-           z_proc_.capacity_bytes() + edges_.capacity_bytes() + mask_.capacity_bytes() + cov_l_.capacity_bytes() +
+           z_proc_.capacity_bytes() + z_smooth_.capacity_bytes() + edges_.capacity_bytes() + mask_.capacity_bytes() + cov_l_.capacity_bytes() +
            cov_r_.capacity_bytes() + parent_.capacity_bytes() + count_.capacity_bytes() + flags_.capacity_bytes() +
-           scan_.capacity_bytes() + moments_.capacity_bytes() + bbox_.capacity_bytes() + table_.capacity_bytes() +
+           scan_.capacity_bytes() + cand_.capacity_bytes() + failed_.capacity_bytes() + moments_.capacity_bytes() + bbox_.capacity_bytes() + table_.capacity_bytes() +
            planes_.capacity_bytes() + lab_a_.capacity_bytes() + lab_b_.capacity_bytes() + lab_c_.capacity_bytes() +
            lab_full_.capacity_bytes();
   }
@@ -138,6 +153,7 @@ class segmenter {
     z_b_.set_backend(b_);
     z_c_.set_backend(b_);
     z_proc_.set_backend(b_);
+    z_smooth_.set_backend(b_);
     edges_.set_backend(b_);
     mask_.set_backend(b_);
     cov_l_.set_backend(b_);
@@ -146,6 +162,8 @@ class segmenter {
     count_.set_backend(b_);
     flags_.set_backend(b_);
     scan_.set_backend(b_);
+    cand_.set_backend(b_);
+    failed_.set_backend(b_);
     moments_.set_backend(b_);
     bbox_.set_backend(b_);
     table_.set_backend(b_);
@@ -174,6 +192,29 @@ class segmenter {
     for (std::int32_t c = 1; c <= n; ++c)
       fits[c - 1] = fit_plane(host_moments_.data() + static_cast<std::size_t>(c) * moment_slots,
                               host_bbox_.data() + static_cast<std::size_t>(c) * 4);
+  }
+
+  // Numbers the union-find components of at least t_size elements offset+1, offset+2, ... in
+  // raster order of their roots and writes the ids into cand_ (only over pixels that took part
+  // when `only_members`, else everywhere: 0 for pixels of no kept component).  Returns how many.
+  std::int32_t number_components(std::int64_t n, std::int32_t offset, bool only_members) {
+    b_.memset(count_.data(), 0, sizeof(std::int32_t) * n);
+    b_.for_each_index(n, detail::count_roots_kernel{parent_.data(), count_.data()});
+    b_.for_each_index(n, detail::flag_candidates_kernel{parent_.data(), count_.data(), p_.t_size, flags_.data()});
+    b_.inclusive_scan(flags_.data(), n, scan_.data());
+    std::int32_t k = 0;  // the scan's last element is the number of components kept
+    b_.copy_to_host(&k, scan_.data() + (n - 1), sizeof(std::int32_t));
+    b_.for_each_index(n, detail::write_candidates_kernel{parent_.data(), flags_.data(), scan_.data(), offset,
+                                                         only_members, cand_.data()});
+    return k;
+  }
+
+  void refit_candidates(image_view<const float> z, const intrinsics& kp, std::int32_t num) {
+    moments_.resize(static_cast<std::size_t>(num + 1) * moment_slots);
+    bbox_.resize(static_cast<std::size_t>(num + 1) * 4);
+    accumulate_moments(b_, z, kp, detail::candidate_image_labels{view(cand_.data(), pw_, ph_)}, num, moments_.data(),
+                       bbox_.data());
+    download_fits(num, fits_);
   }
 
   template <class In>
@@ -224,6 +265,12 @@ class segmenter {
       z = view(z_proc_.data(), pw_, ph_);
       downscale_depth(b_, z_full, z);
     }
+    if (p_.smooth_radius > 0) {  // smooth into the buffer z does not occupy
+      z_smooth_.resize(n);
+      const auto zs = view(z_smooth_.data(), pw_, ph_);
+      smooth_depth(b_, z, zs, p_.smooth_radius, p_.smooth_k, p_.noise.sigma0, p_.noise.sigma2);
+      z = zs;
+    }
     b_.synchronize();
     out.times.preprocess = ms_since(t);
 
@@ -251,29 +298,52 @@ class segmenter {
     count_.resize(n);
     flags_.resize(n);
     scan_.resize(n);
-    const detail::covered_active active{cov_l_.data(), cov_r_.data()};
-    connected_components(b_, n, active, n, detail::grid4_adjacency{z, active, p_.t_je, p_.t_je_quad},
+    cand_.resize(n);
+    const auto cand = view(cand_.data(), pw_, ph_);
+    const float slope_inv_f = p_.adjacency_slope / std::min(std::abs(kp.fx), std::abs(kp.fy));
+    const detail::covered_active covered{cov_l_.data(), cov_r_.data()};
+    connected_components(b_, n, covered, n,
+                         detail::grid4_adjacency<detail::covered_active>{z, covered, p_.t_je, p_.t_je_quad, slope_inv_f},
                          parent_.data());
-    b_.memset(count_.data(), 0, sizeof(std::int32_t) * n);
-    b_.for_each_index(n, detail::count_roots_kernel{parent_.data(), count_.data()});
-    b_.for_each_index(n, detail::flag_candidates_kernel{parent_.data(), count_.data(), p_.t_size, flags_.data()});
-    b_.inclusive_scan(flags_.data(), n, scan_.data());
-    std::int32_t num_cand = 0;  // the scan's last element is the number of candidates
-    b_.copy_to_host(&num_cand, scan_.data() + (n - 1), sizeof(std::int32_t));
-    b_.for_each_index(n, detail::index_candidates_kernel{flags_.data(), scan_.data()});
+    b_.memset(cand_.data(), 0, sizeof(std::int32_t) * n);
+    std::int32_t num_cand = number_components(n, 0, false);
     out.candidates = num_cand;
     b_.synchronize();
     out.times.candidates = ms_since(t);
 
-    // ---- 5. validation -------------------------------------------------------------------------
-    moments_.resize(static_cast<std::size_t>(num_cand + 1) * moment_slots);
-    bbox_.resize(static_cast<std::size_t>(num_cand + 1) * 4);
-    accumulate_moments(b_, z, kp, detail::candidate_labels{parent_.data(), scan_.data()}, num_cand,
-                       moments_.data(), bbox_.data());
-    download_fits(num_cand, fits_);
-    keep_.assign(fits_.size(), 0);
-    for (std::size_t c = 0; c < fits_.size(); ++c) keep_[c] = is_plane(fits_[c], p_) ? 1 : 0;
+    // ---- 5. validation, splitting candidates that fail -----------------------------------------
+    // status: 1 = plane, 0 = failed (may be split), 2 = retired (replaced by its pieces)
+    refit_candidates(z, kp, num_cand);
+    status_.assign(static_cast<std::size_t>(num_cand), 0);
+    for (int c = 0; c < num_cand; ++c) status_[c] = is_plane(fits_[c], p_) ? 1 : 0;
+    for (int round = 1; round <= p_.split_rounds; ++round) {
+      host_failed_.assign(static_cast<std::size_t>(num_cand + 1), 0);
+      bool any = false;
+      for (int c = 0; c < num_cand; ++c)
+        if (status_[c] == 0) {
+          host_failed_[c + 1] = 1;
+          status_[c] = 2;
+          any = true;
+        }
+      if (!any) break;
+      failed_.resize(host_failed_.size());
+      b_.copy_from_host(failed_.data(), host_failed_.data(), host_failed_.size());
+      const detail::eroded_failed_active eroded{cand, failed_.data(), round * p_.split_erode};
+      connected_components(b_, n, eroded, n,
+                           detail::grid4_adjacency<detail::eroded_failed_active>{z, eroded, p_.t_je, p_.t_je_quad,
+                                                                                 slope_inv_f},
+                           parent_.data());
+      const std::int32_t added = number_components(n, num_cand, true);
+      if (added == 0) break;
+      num_cand += added;
+      refit_candidates(z, kp, num_cand);
+      for (int c = num_cand - added; c < num_cand; ++c) status_.push_back(is_plane(fits_[c], p_) ? 1 : 0);
+    }
+    out.candidates = num_cand;
+    keep_.assign(static_cast<std::size_t>(num_cand), 0);
+    for (int c = 0; c < num_cand; ++c) keep_[c] = status_[c] == 1 ? 1 : 0;
     out.valid_candidates = static_cast<int>(std::count(keep_.begin(), keep_.end(), 1));
+    b_.synchronize();
     out.times.validation = ms_since(t);
 
     // ---- 6. merging ----------------------------------------------------------------------------
@@ -290,8 +360,10 @@ class segmenter {
                   host_moments_.data() + static_cast<std::size_t>(c + 1) * moment_slots);
     }
     host_planes_.assign(static_cast<std::size_t>(num_planes + 1) * 4, 0.f);
+    group_fits_.resize(static_cast<std::size_t>(num_planes));
     for (int g = 1; g <= num_planes; ++g) {
       const plane_fit f = fit_plane(group_moments_.data() + static_cast<std::size_t>(g) * moment_slots);
+      group_fits_[g - 1] = f;
       for (int j = 0; j < 3; ++j) host_planes_[4 * g + j] = static_cast<float>(f.normal(j));
       host_planes_[4 * g + 3] = static_cast<float>(f.d);
     }
@@ -306,8 +378,8 @@ class segmenter {
     lab_a_.resize(n);
     lab_b_.resize(n);
     auto la = view(lab_a_.data(), pw_, ph_), lb = view(lab_b_.data(), pw_, ph_);
-    b_.for_each_index(n, detail::relabel_kernel<detail::candidate_labels>{
-                             detail::candidate_labels{parent_.data(), scan_.data()}, table_.data(), la});
+    b_.for_each_index(n, detail::relabel_kernel<detail::candidate_image_labels>{
+                             detail::candidate_image_labels{cand}, table_.data(), la});
     const detail::projector proj = detail::make_projector(kp);
     const detail::noise_sigma sigma = detail::make_noise(p_.noise);
     for (int it = 0; it < p_.grow_iterations && num_planes > 0; ++it) {
@@ -334,15 +406,18 @@ class segmenter {
                        moments_.data(), bbox_.data());
     download_fits(num_planes, fits_);
     for (int g = 1; g <= num_planes; ++g) {
+      // The plane equation and eigenvalues come from the validated candidates (before growth and
+      // closing, whose rim pixels would bias the fit); extent, centroid and counts from the labels.
       const plane_fit& f = fits_[g - 1];
+      const plane_fit& c = group_fits_[g - 1];
       plane pl;
       pl.id = static_cast<std::uint16_t>(g);
       for (int j = 0; j < 3; ++j) {
-        pl.normal[j] = static_cast<float>(f.normal(j));
-        pl.centroid[j] = static_cast<float>(f.centroid(j));
-        pl.eigenvalues[j] = static_cast<float>(f.eigenvalues(j));
+        pl.normal[j] = static_cast<float>(c.normal(j));
+        pl.centroid[j] = static_cast<float>(f.points > 0 ? f.centroid(j) : c.centroid(j));
+        pl.eigenvalues[j] = static_cast<float>(c.eigenvalues(j));
       }
-      pl.d = static_cast<float>(f.d);
+      pl.d = static_cast<float>(c.d);
       pl.pixels = f.pixels;
       pl.points = f.points;
       pl.bbox = f.bbox;
@@ -360,9 +435,10 @@ class segmenter {
   Backend b_;
   int pw_ = 0, ph_ = 0;
   buffer<unsigned char, Backend> raw_in_;
-  buffer<float, Backend> z_a_, z_b_, z_c_, z_proc_;
+  buffer<float, Backend> z_a_, z_b_, z_c_, z_proc_, z_smooth_;
   buffer<std::uint8_t, Backend> edges_, mask_, cov_l_, cov_r_;
-  buffer<std::int32_t, Backend> parent_, count_, flags_, scan_;
+  buffer<std::int32_t, Backend> parent_, count_, flags_, scan_, cand_;
+  buffer<std::uint8_t, Backend> failed_;
   buffer<std::uint64_t, Backend> moments_;
   buffer<std::int32_t, Backend> bbox_;
   buffer<std::uint16_t, Backend> table_;
@@ -371,8 +447,9 @@ class segmenter {
   // host scratch, reused across frames
   std::vector<std::uint64_t> host_moments_, group_moments_;
   std::vector<std::int32_t> host_bbox_;
-  std::vector<plane_fit> fits_;
-  std::vector<char> keep_;
+  std::vector<plane_fit> fits_, group_fits_;
+  std::vector<char> keep_, status_;
+  std::vector<std::uint8_t> host_failed_;
   std::vector<std::uint16_t> host_table_;
   std::vector<float> host_planes_;
 };

@@ -58,7 +58,7 @@ inline edge_set make_edge_set(const params& p) {
   e.use_extrema = p.use_extrema;
   e.use_corner = p.use_corner;
   e.use_curved = p.use_curved;
-  e.jump = {p.t_je, p.t_je_quad};
+  e.jump = {p.t_je, p.t_je_quad, p.t_je_ratio};
   e.extrema = {p.t_ee, p.n_ee};
   e.corner = {p.t_coe, p.t_coe_arm, p.noise_k, p.n_coe, s};
   e.curved = {p.t_cue1, p.t_cue2, p.noise_k, p.n_cue, s};

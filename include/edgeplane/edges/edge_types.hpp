@@ -23,15 +23,21 @@ enum edge_bits : std::uint8_t {
 
 namespace edge_type {
 
-/// Jump edge: the nearest neighbour on either side differs in depth by more than
-/// t_abs + t_quad * z_c^2 metres.
+/// Jump edge: the step to the nearest neighbour on one side exceeds t_abs + t_quad * z_c^2 metres
+/// plus t_ratio times the step on the other side.  The second term keeps a steeply slanted surface
+/// (a floor seen at a grazing angle, whose depth steps grow from pixel to pixel) from firing, while
+/// a real discontinuity, flat on its near side, still does.  t_ratio = 0 is the thesis's rule.
 struct jump {
-  float t_abs, t_quad;
+  float t_abs, t_quad, t_ratio;
   static constexpr std::uint8_t bit = edge_jump;
   EDGEPLANE_HD int reach() const { return 1; }
   EDGEPLANE_HD bool operator()(const detail::neighbourhood& nb) const {
     const float t = t_abs + t_quad * nb.zc * nb.zc;
-    return (nb.nl >= 1 && fabsf(nb.zl[0] - nb.zc) > t) || (nb.nr >= 1 && fabsf(nb.zr[0] - nb.zc) > t);
+    const float dl = nb.nl >= 1 ? fabsf(nb.zl[0] - nb.zc) : -1.f;
+    const float dr = nb.nr >= 1 ? fabsf(nb.zr[0] - nb.zc) : -1.f;
+    const bool jl = dl > t + t_ratio * (dr > 0.f ? dr : 0.f);
+    const bool jr = dr > t + t_ratio * (dl > 0.f ? dl : 0.f);
+    return jl || jr;
   }
 };
 

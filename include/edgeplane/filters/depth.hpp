@@ -102,7 +102,46 @@ struct downscale_kernel {
   }
 };
 
+/// Edge-preserving smoothing: the mean of the valid depths in the (2r+1)^2 window that lie within
+/// k * sigma(z_c) of the centre depth (a box filter truncated in range), so noise is averaged out
+/// on surfaces while depth steps larger than the noise are kept.  Invalid pixels stay invalid.
+struct smooth_kernel {
+  image_view<const float> in;
+  image_view<float> out;
+  int r;
+  float k, s0, s2;
+  EDGEPLANE_HD void operator()(std::int64_t i) const {
+    const int x = static_cast<int>(i % in.width), y = static_cast<int>(i / in.width);
+    const float zc = in(x, y);
+    if (!(zc > 0.f)) {
+      out(x, y) = 0.f;
+      return;
+    }
+    const float tol = k * (s0 + s2 * zc * zc);
+    float s = 0.f;
+    int n = 0;
+    for (int dy = -r; dy <= r; ++dy)
+      for (int dx = -r; dx <= r; ++dx)
+        if (in.contains(x + dx, y + dy)) {
+          const float z = in(x + dx, y + dy);
+          if (z > 0.f && fabsf(z - zc) <= tol) {
+            s += z;
+            ++n;
+          }
+        }
+    out(x, y) = s / static_cast<float>(n);
+  }
+};
+
 }  // namespace detail
+
+/// Edge-preserving smoothing (see detail::smooth_kernel) of `in` into `out` (same size, distinct).
+template <class Backend>
+void smooth_depth(const Backend& b, image_view<const float> in, image_view<float> out, int r, float k,
+                  float sigma0, float sigma2) {
+  detail::check_same_size(in, out, "depth", "smoothed depth");
+  b.for_each_index(in.pixels(), detail::smooth_kernel{in, out, r, k, sigma0, sigma2});
+}
 
 /// Converts raw uint16 depth (scale = metres per unit) or float metres (scale 1) into a working
 /// depth image (float metres, 0 = invalid).  Views in the backend's memory; asynchronous on

@@ -89,21 +89,41 @@ struct covered_active {
   EDGEPLANE_HD bool operator()(std::int64_t i) const { return a[i] != 0 || (b != nullptr && b[i] != 0); }
 };
 
+/// Pixels of failed candidates (failed[cand[i]] != 0) whose whole (2r+1)^2 window lies in the same
+/// candidate: the failed regions eroded by r, so that narrow bridges through gaps in the edge map
+/// break and the pieces can be validated on their own.
+struct eroded_failed_active {
+  image_view<const std::int32_t> cand;
+  const std::uint8_t* failed;
+  int r;
+  EDGEPLANE_HD bool operator()(std::int64_t i) const {
+    const int x = static_cast<int>(i % cand.width), y = static_cast<int>(i / cand.width);
+    const std::int32_t c = cand(x, y);
+    if (c <= 0 || !failed[c]) return false;
+    for (int dy = -r; dy <= r; ++dy)
+      for (int dx = -r; dx <= r; ++dx)
+        if (!cand.contains(x + dx, y + dy) || cand(x + dx, y + dy) != c) return false;
+    return true;
+  }
+};
+
 /// Every element active.
 struct all_active {
   EDGEPLANE_HD bool operator()(std::int64_t) const { return true; }
 };
 
 /// 4-connectivity on an image: pixel i is joined to its right and lower neighbours when both are
-/// active and their depths differ by no more than a jump edge allows (so a gap in the edge map
-/// does not join surfaces at different depths).
+/// active and their depths differ by no more than t_je + t_je_quad z^2 + slope * z * inv_f (the
+/// last term: `slope` pixel footprints, which admits surfaces seen at grazing angles), so a gap in
+/// the edge map does not join surfaces at different depths.
+template <class Active>
 struct grid4_adjacency {
   image_view<const float> depth;
-  covered_active active;
-  float t_je, t_je_quad;
+  Active active;
+  float t_je, t_je_quad, slope_inv_f;
   EDGEPLANE_HD bool compatible(float za, float zb) const {
     const float z = za < zb ? za : zb;
-    return fabsf(za - zb) <= t_je + t_je_quad * z * z;
+    return fabsf(za - zb) <= t_je + t_je_quad * z * z + slope_inv_f * z;
   }
   EDGEPLANE_HD int operator()(std::int64_t i, std::int32_t* a, std::int32_t* b) const {
     if (!active(i)) return 0;

@@ -35,6 +35,14 @@ struct candidate_labels {
   }
 };
 
+/// Labels from a candidate-id image (int32, 0 = none).
+struct candidate_image_labels {
+  image_view<const std::int32_t> cand;
+  EDGEPLANE_HD std::int32_t operator()(std::int64_t i) const {
+    return cand(static_cast<int>(i % cand.width), static_cast<int>(i / cand.width));
+  }
+};
+
 /// Labels from a label image (0 = none).
 struct image_labels {
   image_view<const std::uint16_t> labels;

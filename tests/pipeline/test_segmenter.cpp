@@ -1,0 +1,249 @@
+// End-to-end tests of edgeplane::segmenter on scenes rendered in code (tests/support/scenes.hpp),
+// checked against the planes they were built from.
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <limits>
+#include <map>
+#include <vector>
+
+#include "edgeplane/edgeplane.hpp"
+#include "support/scenes.hpp"
+
+using namespace edgeplane;
+using edgeplane::test::rendered;
+
+namespace {
+
+struct run_output {
+  std::vector<std::uint16_t> labels;
+  segmentation_result result;
+};
+
+template <class Backend = cpu>
+run_output segment_float(const rendered& r, const params& p = presets::thesis_full(), Backend b = {}) {
+  run_output o;
+  o.labels.assign(r.depth.size(), 0xffff);
+  segmenter<Backend> seg(p, b);
+  o.result = seg.segment(make_view(r.depth.data(), r.width, r.height), r.k,
+                         make_view(o.labels.data(), r.width, r.height));
+  return o;
+}
+
+const plane* find_plane(const segmentation_result& res, int id) {
+  for (const auto& p : res.planes)
+    if (p.id == id) return &p;
+  return nullptr;
+}
+
+double angle_deg(const std::array<float, 3>& a, const std::array<double, 4>& b) {
+  const double c = a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+  return std::acos(std::min(1.0, std::max(-1.0, c))) * 180.0 / 3.141592653589793;
+}
+
+/// Every ground-truth plane with at least `min_pixels` visible pixels must be found: the label
+/// covering most of it covers >= 70 % of it, >= 90 % of that label's pixels with ground truth lie
+/// on it, and its plane is within 2 degrees and 1 cm of the truth.  Returns how many were checked.
+int check_known_planes(const test::scene& s, const test::camera_pose& pose, const rendered& r,
+                       const run_output& o, int min_pixels) {
+  std::map<int, std::map<int, int>> overlap;  // gt -> label -> pixels
+  std::map<int, int> gt_size, label_size_on_gt;
+  for (std::size_t i = 0; i < r.gt.size(); ++i) {
+    if (r.depth[i] <= 0.f) continue;
+    gt_size[r.gt[i]]++;
+    overlap[r.gt[i]][o.labels[i]]++;
+    if (o.labels[i] != 0 && r.gt[i] != 0) label_size_on_gt[o.labels[i]]++;
+  }
+  int checked = 0;
+  for (const auto& [id, size] : gt_size) {
+    if (id <= 0 || size < min_pixels) continue;
+    ++checked;
+    CAPTURE(id);
+    CAPTURE(size);
+    int best = 0, best_px = 0;
+    for (const auto& [l, px] : overlap[id])
+      if (l != 0 && px > best_px) {
+        best = l;
+        best_px = px;
+      }
+    REQUIRE(best != 0);
+    CHECK(best_px >= 0.7 * size);
+    CHECK(best_px >= 0.9 * label_size_on_gt[best]);
+    const plane* pl = find_plane(o.result, best);
+    REQUIRE(pl != nullptr);
+    const auto truth = test::plane_in_camera(s, pose, id);
+    CHECK(angle_deg(pl->normal, truth) < 2.0);
+    CHECK(std::abs(pl->d - truth[3]) < 0.01);
+  }
+  return checked;
+}
+
+}  // namespace
+
+TEST_CASE("segmenter: room corner with a box on the floor") {
+  const auto s = test::room_with_box();
+  const auto pose = test::room_camera();
+  const rendered r = test::render(s, pose, 512, 424, test::kinect2_intrinsics(), {0.001, 0.0005, 0.0, 7});
+  const run_output o = segment_float(r);
+  // four ground-truth planes exceed 3000 px from this view: floor, two walls, the box's front
+  CHECK(check_known_planes(s, pose, r, o, 3000) == 4);
+}
+
+// Known gap: the table top's 3 cm front face lies within the corner detector's arm length of the
+// top's edge, so its pixels join the top candidate and bias the fitted offset by about 1.3 cm.
+// Kept as a failing expectation until an inlier refit or a shorter-arm corner pass lands.
+TEST_CASE("segmenter: table top, floor and wall" * doctest::may_fail()) {
+  const auto s = test::table_scene();
+  const auto pose = test::table_camera();
+  const rendered r = test::render(s, pose, 512, 424, test::kinect2_intrinsics(), {0.001, 0.0005, 0.0, 3});
+  const run_output o = segment_float(r);
+  CHECK(check_known_planes(s, pose, r, o, 5000) >= 3);
+}
+
+TEST_CASE("segmenter: stairs give one plane per tread and riser") {
+  const auto s = test::stairs_scene();
+  const auto pose = test::stairs_camera();
+  const rendered r = test::render(s, pose, 512, 424, test::kinect2_intrinsics(), {0.001, 0.0005, 0.0, 5});
+  const run_output o = segment_float(r);
+  CHECK(check_known_planes(s, pose, r, o, 4000) >= 6);
+}
+
+TEST_CASE("segmenter: a cylinder does not become a plane") {
+  const auto s = test::cylinder_scene();
+  const auto pose = test::cylinder_camera();
+  const rendered r = test::render(s, pose, 512, 424, test::kinect2_intrinsics(), {0.001, 0.0005, 0.0, 11});
+  const run_output o = segment_float(r);
+  std::size_t side = 0, side_labelled = 0;
+  std::map<int, std::size_t> label_px, label_on_side;
+  for (std::size_t i = 0; i < r.gt.size(); ++i) {
+    if (o.labels[i]) label_px[o.labels[i]]++;
+    if (r.gt[i] != -1) continue;
+    ++side;
+    if (o.labels[i] != 0) {
+      ++side_labelled;
+      label_on_side[o.labels[i]]++;
+    }
+  }
+  REQUIRE(side > 20000);
+  CHECK(side_labelled < 0.05 * side);
+  for (const auto& [l, px] : label_on_side) CHECK(px < 0.2 * label_px[l]);
+  CHECK(check_known_planes(s, pose, r, o, 5000) >= 2);  // the floor and the wall are still found
+}
+
+TEST_CASE("segmenter: a fronto-parallel wall is one plane facing the camera") {
+  rendered r;
+  r.width = 160;
+  r.height = 120;
+  r.k = test::kinect2_intrinsics(160, 120);
+  r.depth.assign(160 * 120, 2.0f);
+  r.gt.assign(160 * 120, 1);
+  params p = presets::thesis_full();
+  const run_output o = segment_float(r, p);
+  REQUIRE(o.result.planes.size() == 1);
+  const plane& pl = o.result.planes[0];
+  CHECK(pl.normal[2] == doctest::Approx(-1.0).epsilon(1e-4));
+  CHECK(pl.d == doctest::Approx(2.0).epsilon(1e-3));
+  CHECK(pl.pixels == 160 * 120);
+  CHECK(pl.bbox == std::array<int, 4>{0, 0, 159, 119});
+  for (auto l : o.labels) CHECK_EQ(l, pl.id);
+}
+
+TEST_CASE("segmenter: uint16 and float inputs agree, serial and parallel agree, reuse is stable") {
+  const auto s = test::room_with_box();
+  const rendered r = test::render(s, test::room_camera(), 256, 212, test::kinect2_intrinsics(256, 212),
+                                  {0.001, 0.0005, 0.02, 9});
+  const auto mm = r.depth_mm();
+  params p = presets::thesis_half();
+  p.downscale = false;
+  std::vector<std::uint16_t> a(mm.size()), b(mm.size()), c(mm.size());
+  segmenter<cpu> par(p);
+  segmenter<cpu> ser(p, cpu{cpu::mode::serial});
+  const auto ra = par.segment(make_view(mm.data(), r.width, r.height), 0.001f, r.k, make_view(a.data(), r.width, r.height));
+  const std::size_t bytes = par.scratch_bytes();
+  const auto rb = par.segment(make_view(mm.data(), r.width, r.height), 0.001f, r.k, make_view(b.data(), r.width, r.height));
+  CHECK(par.scratch_bytes() == bytes);  // nothing re-allocated for a frame of the same size
+  ser.segment(make_view(mm.data(), r.width, r.height), 0.001f, r.k, make_view(c.data(), r.width, r.height));
+  CHECK(ra.planes.size() >= 3);
+  CHECK(a == b);
+  CHECK(a == c);
+  // float metres with the same values give the same labels
+  std::vector<float> f(mm.size());
+  for (std::size_t i = 0; i < mm.size(); ++i) f[i] = mm[i] * 0.001f;
+  std::vector<std::uint16_t> d(mm.size());
+  par.segment(make_view(static_cast<const float*>(f.data()), r.width, r.height), r.k,
+              make_view(d.data(), r.width, r.height));
+  CHECK(a == d);
+}
+
+TEST_CASE("segmenter: half-scale processing returns full-size labels") {
+  const auto s = test::room_with_box();
+  const auto pose = test::room_camera();
+  const rendered r = test::render(s, pose, 512, 424, test::kinect2_intrinsics(), {0.001, 0.0005, 0.0, 7});
+  const run_output o = segment_float(r, presets::thesis_half());
+  CHECK(check_known_planes(s, pose, r, o, 3000) == 4);
+}
+
+TEST_CASE("segmenter: degenerate data gives a well-defined empty result") {
+  segmenter<cpu> seg;
+  const intrinsics k{365.f, 365.f, 10.f, 10.f};
+  SUBCASE("all invalid") {
+    std::vector<std::uint16_t> z(64 * 48, 0), l(64 * 48, 7);
+    const auto res = seg.segment(make_view(static_cast<const std::uint16_t*>(z.data()), 64, 48), 0.001f, k,
+                                 make_view(l.data(), 64, 48));
+    CHECK(res.planes.empty());
+    for (auto v : l) CHECK_EQ(v, 0);
+  }
+  SUBCASE("NaN, infinities and negatives") {
+    std::vector<float> z(64 * 48);
+    for (std::size_t i = 0; i < z.size(); ++i)
+      z[i] = i % 3 == 0 ? std::numeric_limits<float>::quiet_NaN()
+                        : (i % 3 == 1 ? std::numeric_limits<float>::infinity() : -1.f);
+    std::vector<std::uint16_t> l(z.size(), 7);
+    const auto res = seg.segment(make_view(static_cast<const float*>(z.data()), 64, 48), k, make_view(l.data(), 64, 48));
+    CHECK(res.planes.empty());
+    for (auto v : l) CHECK_EQ(v, 0);
+  }
+  SUBCASE("tiny and line images") {
+    for (auto [w, h] : {std::pair{1, 1}, std::pair{1, 50}, std::pair{50, 1}, std::pair{2, 2}, std::pair{0, 0}}) {
+      std::vector<float> z(static_cast<std::size_t>(w) * h + 1, 1.5f);
+      std::vector<std::uint16_t> l(z.size(), 7);
+      const auto res = seg.segment(make_view(static_cast<const float*>(z.data()), w, h), k, make_view(l.data(), w, h));
+      CHECK(res.planes.empty());
+      for (int i = 0; i < w * h; ++i) CHECK_EQ(l[i], 0);
+    }
+  }
+  SUBCASE("a single valid pixel") {
+    std::vector<float> z(40 * 30, 0.f);
+    z[400] = 2.f;
+    std::vector<std::uint16_t> l(z.size(), 7);
+    CHECK(seg.segment(make_view(static_cast<const float*>(z.data()), 40, 30), k, make_view(l.data(), 40, 30)).planes.empty());
+  }
+}
+
+TEST_CASE("segmenter: unusable arguments throw edgeplane::error") {
+  segmenter<cpu> seg;
+  std::vector<float> z(32 * 32, 1.f);
+  std::vector<std::uint16_t> l(32 * 32);
+  const auto zv = make_view(static_cast<const float*>(z.data()), 32, 32);
+  const intrinsics k{300.f, 300.f, 16.f, 16.f};
+  CHECK_THROWS_AS(seg.segment(zv, k, make_view(l.data(), 16, 32)), edgeplane::error);  // size mismatch
+  CHECK_THROWS_AS(seg.segment(zv, intrinsics{0.f, 300.f, 16.f, 16.f}, make_view(l.data(), 32, 32)), edgeplane::error);
+  CHECK_THROWS_AS(seg.segment(zv, intrinsics{std::nanf(""), 300.f, 16.f, 16.f}, make_view(l.data(), 32, 32)),
+                  edgeplane::error);
+  CHECK_THROWS_AS(seg.segment(image_view<const float>{nullptr, 32, 32, 32}, k, make_view(l.data(), 32, 32)),
+                  edgeplane::error);
+  CHECK_THROWS_AS(seg.segment(image_view<const float>{z.data(), 32, 32, 16}, k, make_view(l.data(), 32, 32)),
+                  edgeplane::error);  // pitch < width
+  std::vector<std::uint16_t> raw(32 * 32, 1000);
+  CHECK_THROWS_AS(seg.segment(make_view(static_cast<const std::uint16_t*>(raw.data()), 32, 32), -1.f, k,
+                              make_view(l.data(), 32, 32)),
+                  edgeplane::error);  // negative depth scale
+  params bad = presets::thesis_full();
+  bad.t_je = -1.f;
+  CHECK_THROWS_AS(segmenter<cpu>{bad}, edgeplane::error);
+  try {
+    seg.segment(zv, k, make_view(l.data(), 16, 32));
+  } catch (const edgeplane::error& e) {
+    CHECK(std::string(e.what()).find("16x32") != std::string::npos);  // the message carries the values
+  }
+}
