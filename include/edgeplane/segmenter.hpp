@@ -137,7 +137,7 @@ class segmenter {
            z_proc_.capacity_bytes() + z_smooth_.capacity_bytes() + edges_.capacity_bytes() + mask_.capacity_bytes() + cov_l_.capacity_bytes() +
            cov_r_.capacity_bytes() + parent_.capacity_bytes() + count_.capacity_bytes() + flags_.capacity_bytes() +
            scan_.capacity_bytes() + cand_.capacity_bytes() + failed_.capacity_bytes() + moments_.capacity_bytes() + bbox_.capacity_bytes() + table_.capacity_bytes() +
-           planes_.capacity_bytes() + lab_a_.capacity_bytes() + lab_b_.capacity_bytes() + lab_c_.capacity_bytes() +
+           planes_.capacity_bytes() + tol_.capacity_bytes() + lab_a_.capacity_bytes() + lab_b_.capacity_bytes() + lab_c_.capacity_bytes() +
            lab_full_.capacity_bytes();
   }
 
@@ -168,6 +168,7 @@ class segmenter {
     bbox_.set_backend(b_);
     table_.set_backend(b_);
     planes_.set_backend(b_);
+    tol_.set_backend(b_);
     lab_a_.set_backend(b_);
     lab_b_.set_backend(b_);
     lab_c_.set_backend(b_);
@@ -360,17 +361,40 @@ class segmenter {
                   host_moments_.data() + static_cast<std::size_t>(c + 1) * moment_slots);
     }
     host_planes_.assign(static_cast<std::size_t>(num_planes + 1) * 4, 0.f);
+    host_tol_.assign(static_cast<std::size_t>(num_planes + 1), 0.f);
     group_fits_.resize(static_cast<std::size_t>(num_planes));
-    for (int g = 1; g <= num_planes; ++g) {
-      const plane_fit f = fit_plane(group_moments_.data() + static_cast<std::size_t>(g) * moment_slots);
-      group_fits_[g - 1] = f;
-      for (int j = 0; j < 3; ++j) host_planes_[4 * g + j] = static_cast<float>(f.normal(j));
-      host_planes_[4 * g + 3] = static_cast<float>(f.d);
-    }
+    auto set_planes = [&](const std::uint64_t* moments) {
+      for (int g = 1; g <= num_planes; ++g) {
+        const plane_fit f = fit_plane(moments + static_cast<std::size_t>(g) * moment_slots);
+        if (f.points < 3) continue;  // keep the previous fit of a plane that lost its inliers
+        group_fits_[g - 1] = f;
+        for (int j = 0; j < 3; ++j) host_planes_[4 * g + j] = static_cast<float>(f.normal(j));
+        host_planes_[4 * g + 3] = static_cast<float>(f.d);
+        host_tol_[g] = static_cast<float>(std::max(2.5 * std::sqrt(f.eigenvalues(2)), 1e-3));
+      }
+    };
+    set_planes(group_moments_.data());
     table_.resize(host_table_.size());
     planes_.resize(host_planes_.size());
+    tol_.resize(host_tol_.size());
     b_.copy_from_host(table_.data(), host_table_.data(), host_table_.size() * sizeof(std::uint16_t));
+    // Robust refit: twice, keep only the candidate pixels within 2.5 RMS residuals of their plane
+    // (the rim of a neighbouring face that a candidate picks up at a crease biases the fit).
+    for (int pass = 0; pass < 2 && num_planes > 0; ++pass) {
+      b_.copy_from_host(planes_.data(), host_planes_.data(), host_planes_.size() * sizeof(float));
+      b_.copy_from_host(tol_.data(), host_tol_.data(), host_tol_.size() * sizeof(float));
+      moments_.resize(static_cast<std::size_t>(num_planes + 1) * moment_slots);
+      bbox_.resize(static_cast<std::size_t>(num_planes + 1) * 4);
+      accumulate_moments(b_, z, kp,
+                         detail::inlier_labels{cand, table_.data(), planes_.data(), tol_.data(), z,
+                                               detail::make_projector(kp)},
+                         num_planes, moments_.data(), bbox_.data());
+      host_moments_.resize(static_cast<std::size_t>(num_planes + 1) * moment_slots);
+      b_.copy_to_host(host_moments_.data(), moments_.data(), host_moments_.size() * sizeof(std::uint64_t));
+      set_planes(host_moments_.data());
+    }
     b_.copy_from_host(planes_.data(), host_planes_.data(), host_planes_.size() * sizeof(float));
+    b_.copy_from_host(tol_.data(), host_tol_.data(), host_tol_.size() * sizeof(float));
     b_.synchronize();
     out.times.merge = ms_since(t);
 
@@ -383,7 +407,7 @@ class segmenter {
     const detail::projector proj = detail::make_projector(kp);
     const detail::noise_sigma sigma = detail::make_noise(p_.noise);
     for (int it = 0; it < p_.grow_iterations && num_planes > 0; ++it) {
-      b_.for_each_index(n, detail::grow_kernel{z, la, lb, proj, sigma, p_.grow_k, planes_.data()});
+      b_.for_each_index(n, detail::grow_kernel{z, la, lb, proj, sigma, p_.grow_k, planes_.data(), tol_.data()});
       std::swap(la, lb);
     }
     if (p_.label_closing_radius > 0 && num_planes > 0) {
@@ -442,7 +466,7 @@ class segmenter {
   buffer<std::uint64_t, Backend> moments_;
   buffer<std::int32_t, Backend> bbox_;
   buffer<std::uint16_t, Backend> table_;
-  buffer<float, Backend> planes_;
+  buffer<float, Backend> planes_, tol_;
   buffer<std::uint16_t, Backend> lab_a_, lab_b_, lab_c_, lab_full_;
   // host scratch, reused across frames
   std::vector<std::uint64_t> host_moments_, group_moments_;
@@ -451,7 +475,7 @@ class segmenter {
   std::vector<char> keep_, status_;
   std::vector<std::uint8_t> host_failed_;
   std::vector<std::uint16_t> host_table_;
-  std::vector<float> host_planes_;
+  std::vector<float> host_planes_, host_tol_;
 };
 
 }  // namespace edgeplane

@@ -22,7 +22,9 @@ struct relabel_kernel {
 
 /// One step of plane-guided growth: an unlabelled pixel with valid depth takes the label of the
 /// 4-neighbour whose plane (n . X + d = 0, `planes` holds nx, ny, nz, d per label, label 0 unused)
-/// is nearest to its point, if that distance is within k * sigma(z).  Reads `in`, writes `out`.
+/// is nearest to its point, if that distance is within k * sigma(z) and within the plane's own
+/// tolerance cap[l] (2.5 RMS residuals of its fit; a pessimistic noise model must not let a plane
+/// swallow the rim of a neighbouring face).  Reads `in`, writes `out`.
 struct grow_kernel {
   image_view<const float> depth;
   image_view<const std::uint16_t> in;
@@ -31,6 +33,7 @@ struct grow_kernel {
   noise_sigma sigma;
   float k;
   const float* planes;
+  const float* cap;
   EDGEPLANE_HD void operator()(std::int64_t i) const {
     const int x = static_cast<int>(i % in.width), y = static_cast<int>(i / in.width);
     const std::uint16_t cur = in(x, y);
@@ -51,6 +54,7 @@ struct grow_kernel {
       if (l == 0 || l == best) continue;
       const float* q = planes + 4 * l;
       const float d = fabsf(q[0] * p.x + q[1] * p.y + q[2] * p.z + q[3]);
+      if (d > cap[l]) continue;
       if (d <= best_d && (d < best_d || best == 0 || l < best)) {
         best_d = d;
         best = l;

@@ -43,6 +43,29 @@ struct candidate_image_labels {
   }
 };
 
+/// Inliers of merged candidates: pixel i counts for plane g = table[cand(i)] only when its point
+/// lies within tol[g] metres of that plane (planes: nx, ny, nz, d per plane, index 0 unused).
+/// Used to refit planes without the rim pixels a candidate picks up at creases.
+struct inlier_labels {
+  image_view<const std::int32_t> cand;
+  const std::uint16_t* table;
+  const float* planes;
+  const float* tol;
+  image_view<const float> depth;
+  projector proj;
+  EDGEPLANE_HD std::int32_t operator()(std::int64_t i) const {
+    const int x = static_cast<int>(i % cand.width), y = static_cast<int>(i / cand.width);
+    const std::int32_t c = cand(x, y);
+    if (c <= 0) return 0;
+    const std::int32_t g = table[c];
+    const float z = depth(x, y);
+    if (g == 0 || !(z > 0.f)) return 0;
+    const point3 p = proj(x, y, z);
+    const float* q = planes + 4 * g;
+    return fabsf(q[0] * p.x + q[1] * p.y + q[2] * p.z + q[3]) <= tol[g] ? g : 0;
+  }
+};
+
 /// Labels from a label image (0 = none).
 struct image_labels {
   image_view<const std::uint16_t> labels;
