@@ -8,7 +8,11 @@
 //     empty, truncated, 8-bit or colour file gives one clear message instead of a decoder's noise;
 //   - write_png, write_planes_json: outputs, each failure an exception with the path;
 //   - render_overlay: depth as grey with one colour per plane id and darker plane boundaries;
-//   - stage_fields, median: per-stage timing tables.
+//   - stage_fields, median: per-stage timing tables;
+//   - load_label_png: an 8- or 16-bit single-channel label / mask PNG, checked like load_depth_png;
+//   - json_value, parse_json, load_json_file: a small strict JSON reader for dataset metadata;
+//   - read_file_bytes, natural_less, json_string: file reading, "scene_2 < scene_10" name ordering,
+//     JSON string literals.
 #pragma once
 #include <algorithm>
 #include <array>
@@ -501,6 +505,411 @@ inline double median(std::vector<double> v) {
   const double hi = v[m];
   if (v.size() % 2) return hi;
   return 0.5 * (hi + *std::max_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(m)));
+}
+
+// ---- label and mask input ----------------------------------------------------------------------
+
+/// The whole of a regular file as bytes; cli_error (naming `path`) when it is missing, a
+/// directory, unreadable or empty.
+inline std::vector<unsigned char> read_file_bytes(const std::string& path) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const auto st = fs::status(path, ec);
+  if (ec || !fs::exists(st)) fail("cannot read '" + path + "': no such file");
+  if (fs::is_directory(st)) fail("cannot read '" + path + "': it is a directory");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) fail("cannot open '" + path + "' for reading");
+  std::vector<unsigned char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (in.bad()) fail("error while reading '" + path + "'");
+  if (bytes.empty()) fail("'" + path + "' is empty");
+  return bytes;
+}
+
+namespace detail {
+/// What the IHDR chunk of a PNG says.
+struct png_header {
+  std::uint32_t width = 0, height = 0;
+  int bit_depth = 0, colour_type = -1;
+};
+
+/// Checks the chunk structure of a PNG held in memory (signature, every chunk inside the file with
+/// a correct CRC, IHDR first, IEND present, a usable size) and returns its header; any bit depth
+/// and colour type.  Throws cli_error naming the problem.
+inline png_header check_png_chunks(const std::vector<unsigned char>& b, const std::string& name) {
+  static constexpr unsigned char signature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  if (b.size() < 8 || !std::equal(std::begin(signature), std::end(signature), b.begin()))
+    fail("'" + name + "' is not a PNG file");
+  std::size_t pos = 8;
+  bool first = true, end_seen = false;
+  png_header h;
+  while (pos + 8 <= b.size()) {
+    const std::uint32_t len = read_be32(&b[pos]);
+    std::string type(reinterpret_cast<const char*>(&b[pos + 4]), 4);
+    for (char& c : type)
+      if (c < 0x21 || c > 0x7e) c = '?';
+    if (len > 0x7fffffffu || len > b.size() - pos - 8 || b.size() - pos - 8 - len < 4)
+      fail("'" + name + "' is truncated or corrupt (chunk '" + type + "' runs past the end of the file)");
+    if (read_be32(&b[pos + 8 + len]) != png_crc(&b[pos + 4], len + 4))
+      fail("'" + name + "' is corrupt (bad checksum in chunk '" + type + "')");
+    if (first) {
+      if (type != "IHDR" || len != 13) fail("'" + name + "' is corrupt (does not start with an IHDR chunk)");
+      h.width = read_be32(&b[pos + 8]);
+      h.height = read_be32(&b[pos + 12]);
+      h.bit_depth = b[pos + 16];
+      h.colour_type = b[pos + 17];
+      first = false;
+    }
+    pos += 12 + static_cast<std::size_t>(len);
+    if (type == "IEND") {
+      end_seen = true;
+      break;
+    }
+  }
+  if (first) fail("'" + name + "' is truncated (no IHDR chunk)");
+  if (!end_seen) fail("'" + name + "' is truncated (no IEND chunk)");
+  if (h.width == 0 || h.height == 0 || h.width > 0x7fffffffu || h.height > 0x7fffffffu)
+    fail("'" + name + "' has an invalid size " + std::to_string(h.width) + "x" + std::to_string(h.height));
+  return h;
+}
+}  // namespace detail
+
+/// Reads an 8- or 16-bit single-channel (greyscale) PNG of labels or mask codes and returns it as
+/// CV_16UC1 (8-bit values are widened unchanged).  `what` names the image in messages ("ground
+/// truth", "ignore mask").  Checked before it is decoded like load_depth_png; every problem throws
+/// cli_error with a one-line message.
+inline cv::Mat load_label_png(const std::string& path, const std::string& what = "label image") {
+  const std::vector<unsigned char> bytes = read_file_bytes(path);
+  const detail::png_header h = detail::check_png_chunks(bytes, path);
+  if (h.colour_type != 0 || (h.bit_depth != 8 && h.bit_depth != 16))
+    fail("'" + path + "' is a " + std::to_string(h.bit_depth) + "-bit " + detail::png_colour_name(h.colour_type) +
+         " image; expected an 8- or 16-bit single-channel " + what);
+  cv::Mat m;
+  try {
+    const detail::stderr_silencer quiet;
+    m = cv::imdecode(bytes, cv::IMREAD_UNCHANGED);
+  } catch (const cv::Exception& e) {
+    fail("'" + path + "' could not be decoded: " + e.msg);
+  }
+  if (m.empty()) fail("'" + path + "' could not be decoded as a PNG image");
+  if (m.channels() != 1 || (m.depth() != CV_8U && m.depth() != CV_16U))
+    fail("'" + path + "' decoded to " + std::to_string(m.elemSize1() * 8) + "-bit data with " +
+         std::to_string(m.channels()) + " channel(s); expected an 8- or 16-bit single-channel " + what);
+  if (m.depth() == CV_8U) {
+    cv::Mat wide;
+    m.convertTo(wide, CV_16U);
+    return wide;
+  }
+  return m;
+}
+
+// ---- JSON input --------------------------------------------------------------------------------
+
+/// A parsed JSON value (RFC 8259).  Objects keep their members in file order; a repeated key is
+/// an error.  Numbers are doubles.
+struct json_value {
+  enum class kind { null, boolean, number, string, array, object };
+  kind type = kind::null;
+  bool boolean = false;
+  double number = 0;
+  std::string text;                 ///< a string's value
+  std::vector<json_value> items;    ///< an array's elements, or an object's member values
+  std::vector<std::string> keys;    ///< an object's member names (parallel to items)
+
+  bool is_object() const { return type == kind::object; }
+  bool is_array() const { return type == kind::array; }
+  bool is_number() const { return type == kind::number; }
+  bool is_string() const { return type == kind::string; }
+  /// The member `key` of an object, or nullptr (also when this is not an object).
+  const json_value* find(std::string_view key) const {
+    if (type != kind::object) return nullptr;
+    for (std::size_t i = 0; i < keys.size(); ++i)
+      if (keys[i] == key) return &items[i];
+    return nullptr;
+  }
+};
+
+namespace detail {
+class json_parser {
+ public:
+  json_parser(std::string_view text, const std::string& name) : s_(text), name_(name) {}
+  json_value parse_document() {
+    json_value v = parse_value(0);
+    skip_space();
+    if (p_ != s_.size()) error("unexpected text after the JSON value");
+    return v;
+  }
+
+ private:
+  [[noreturn]] void error(const std::string& what) const {
+    std::size_t line = 1, col = 1;
+    for (std::size_t i = 0; i < p_ && i < s_.size(); ++i) {
+      if (s_[i] == '\n') {
+        ++line;
+        col = 1;
+      } else {
+        ++col;
+      }
+    }
+    fail("'" + name_ + "' is not valid JSON: " + what + " at line " + std::to_string(line) + ", column " +
+         std::to_string(col));
+  }
+  void skip_space() {
+    while (p_ < s_.size() && (s_[p_] == ' ' || s_[p_] == '\t' || s_[p_] == '\n' || s_[p_] == '\r')) ++p_;
+  }
+  bool literal(std::string_view word) {
+    if (s_.substr(p_, word.size()) != word) return false;
+    p_ += word.size();
+    return true;
+  }
+  static void append_utf8(std::string& out, std::uint32_t c) {
+    if (c < 0x80) {
+      out += static_cast<char>(c);
+    } else if (c < 0x800) {
+      out += static_cast<char>(0xc0 | (c >> 6));
+      out += static_cast<char>(0x80 | (c & 0x3f));
+    } else if (c < 0x10000) {
+      out += static_cast<char>(0xe0 | (c >> 12));
+      out += static_cast<char>(0x80 | ((c >> 6) & 0x3f));
+      out += static_cast<char>(0x80 | (c & 0x3f));
+    } else {
+      out += static_cast<char>(0xf0 | (c >> 18));
+      out += static_cast<char>(0x80 | ((c >> 12) & 0x3f));
+      out += static_cast<char>(0x80 | ((c >> 6) & 0x3f));
+      out += static_cast<char>(0x80 | (c & 0x3f));
+    }
+  }
+  std::uint32_t hex4() {
+    if (p_ + 4 > s_.size()) error("truncated \\u escape");
+    std::uint32_t v = 0;
+    for (int i = 0; i < 4; ++i) {
+      const char c = s_[p_++];
+      v <<= 4;
+      if (c >= '0' && c <= '9') v |= static_cast<std::uint32_t>(c - '0');
+      else if (c >= 'a' && c <= 'f') v |= static_cast<std::uint32_t>(c - 'a' + 10);
+      else if (c >= 'A' && c <= 'F') v |= static_cast<std::uint32_t>(c - 'A' + 10);
+      else error("bad \\u escape");
+    }
+    return v;
+  }
+  std::string parse_string() {
+    ++p_;  // the opening quote
+    std::string out;
+    while (true) {
+      if (p_ >= s_.size()) error("unterminated string");
+      const char c = s_[p_++];
+      if (c == '"') return out;
+      if (static_cast<unsigned char>(c) < 0x20) error("control character in a string");
+      if (c != '\\') {
+        out += c;
+        continue;
+      }
+      if (p_ >= s_.size()) error("unterminated string");
+      const char e = s_[p_++];
+      switch (e) {
+        case '"': out += '"'; break;
+        case '\\': out += '\\'; break;
+        case '/': out += '/'; break;
+        case 'b': out += '\b'; break;
+        case 'f': out += '\f'; break;
+        case 'n': out += '\n'; break;
+        case 'r': out += '\r'; break;
+        case 't': out += '\t'; break;
+        case 'u': {
+          std::uint32_t cp = hex4();
+          if (cp >= 0xd800 && cp < 0xdc00 && p_ + 1 < s_.size() && s_[p_] == '\\' && s_[p_ + 1] == 'u') {
+            p_ += 2;
+            const std::uint32_t lo = hex4();
+            if (lo < 0xdc00 || lo >= 0xe000) error("bad surrogate pair");
+            cp = 0x10000 + ((cp - 0xd800) << 10) + (lo - 0xdc00);
+          }
+          append_utf8(out, cp);
+          break;
+        }
+        default: error("bad escape in a string");
+      }
+    }
+  }
+  double parse_number() {
+    const std::size_t start = p_;
+    if (p_ < s_.size() && s_[p_] == '-') ++p_;
+    auto digits = [&] {
+      const std::size_t d = p_;
+      while (p_ < s_.size() && s_[p_] >= '0' && s_[p_] <= '9') ++p_;
+      return p_ > d;
+    };
+    if (!digits()) error("bad number");
+    if (p_ < s_.size() && s_[p_] == '.') {
+      ++p_;
+      if (!digits()) error("bad number");
+    }
+    if (p_ < s_.size() && (s_[p_] == 'e' || s_[p_] == 'E')) {
+      ++p_;
+      if (p_ < s_.size() && (s_[p_] == '+' || s_[p_] == '-')) ++p_;
+      if (!digits()) error("bad number");
+    }
+    double v = 0;
+    const auto [end, ec] = std::from_chars(s_.data() + start, s_.data() + p_, v);
+    if (ec != std::errc{} || end != s_.data() + p_) error("number out of range");
+    return v;
+  }
+  json_value parse_value(int depth) {
+    if (depth > 256) error("nesting too deep");
+    skip_space();
+    if (p_ >= s_.size()) error("unexpected end of file");
+    json_value v;
+    const char c = s_[p_];
+    if (c == '{') {
+      v.type = json_value::kind::object;
+      ++p_;
+      skip_space();
+      if (p_ < s_.size() && s_[p_] == '}') {
+        ++p_;
+        return v;
+      }
+      while (true) {
+        skip_space();
+        if (p_ >= s_.size() || s_[p_] != '"') error("expected a member name");
+        std::string key = parse_string();
+        if (v.find(key) != nullptr) error("member \"" + key + "\" given twice");
+        skip_space();
+        if (p_ >= s_.size() || s_[p_] != ':') error("expected ':'");
+        ++p_;
+        v.items.push_back(parse_value(depth + 1));
+        v.keys.push_back(std::move(key));
+        skip_space();
+        if (p_ < s_.size() && s_[p_] == ',') {
+          ++p_;
+          continue;
+        }
+        if (p_ < s_.size() && s_[p_] == '}') {
+          ++p_;
+          return v;
+        }
+        error("expected ',' or '}'");
+      }
+    }
+    if (c == '[') {
+      v.type = json_value::kind::array;
+      ++p_;
+      skip_space();
+      if (p_ < s_.size() && s_[p_] == ']') {
+        ++p_;
+        return v;
+      }
+      while (true) {
+        v.items.push_back(parse_value(depth + 1));
+        skip_space();
+        if (p_ < s_.size() && s_[p_] == ',') {
+          ++p_;
+          continue;
+        }
+        if (p_ < s_.size() && s_[p_] == ']') {
+          ++p_;
+          return v;
+        }
+        error("expected ',' or ']'");
+      }
+    }
+    if (c == '"') {
+      v.type = json_value::kind::string;
+      v.text = parse_string();
+      return v;
+    }
+    if (literal("true")) {
+      v.type = json_value::kind::boolean;
+      v.boolean = true;
+      return v;
+    }
+    if (literal("false")) {
+      v.type = json_value::kind::boolean;
+      return v;
+    }
+    if (literal("null")) return v;
+    if (c == '-' || (c >= '0' && c <= '9')) {
+      v.type = json_value::kind::number;
+      v.number = parse_number();
+      return v;
+    }
+    error("unexpected character");
+  }
+
+  std::string_view s_;
+  std::string name_;
+  std::size_t p_ = 0;
+};
+}  // namespace detail
+
+/// Parses JSON text; `name` (a file name) appears in messages.  Throws cli_error with the line and
+/// column of the first problem.
+inline json_value parse_json(std::string_view text, const std::string& name) {
+  return detail::json_parser(text, name).parse_document();
+}
+
+/// Reads and parses a JSON file; every problem throws cli_error naming `path`.
+inline json_value load_json_file(const std::string& path) {
+  const std::vector<unsigned char> bytes = read_file_bytes(path);
+  return parse_json(std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()), path);
+}
+
+/// The number at `key` of `object`, finite; cli_error naming `source` and `key` otherwise.
+inline double json_number_at(const json_value& object, std::string_view key, const std::string& source) {
+  const json_value* v = object.find(key);
+  if (v == nullptr) fail("'" + source + "': missing \"" + std::string(key) + "\"");
+  if (!v->is_number() || !std::isfinite(v->number))
+    fail("'" + source + "': \"" + std::string(key) + "\" is not a finite number");
+  return v->number;
+}
+
+// ---- names -------------------------------------------------------------------------------------
+
+/// Orders names with their digit runs compared as numbers: "abw.test.3" < "abw.test.12".
+inline bool natural_less(const std::string& a, const std::string& b) {
+  std::size_t i = 0, j = 0;
+  auto digit = [](char c) { return c >= '0' && c <= '9'; };
+  while (i < a.size() && j < b.size()) {
+    if (digit(a[i]) && digit(b[j])) {
+      std::size_t i0 = i, j0 = j;
+      while (i0 < a.size() && a[i0] == '0') ++i0;  // leading zeros do not make a number larger
+      while (j0 < b.size() && b[j0] == '0') ++j0;
+      std::size_t i1 = i0, j1 = j0;
+      while (i1 < a.size() && digit(a[i1])) ++i1;
+      while (j1 < b.size() && digit(b[j1])) ++j1;
+      if (i1 - i0 != j1 - j0) return i1 - i0 < j1 - j0;
+      const int c = a.compare(i0, i1 - i0, b, j0, j1 - j0);
+      if (c != 0) return c < 0;
+      if (i1 - i != j1 - j) return i1 - i < j1 - j;  // "01" after "1"
+      i = i1;
+      j = j1;
+      continue;
+    }
+    if (a[i] != b[j]) return a[i] < b[j];
+    ++i;
+    ++j;
+  }
+  return a.size() - i < b.size() - j;
+}
+
+/// `text` as a JSON string literal, quotes included (control characters escaped).
+inline std::string json_string(std::string_view text) {
+  std::string s = "\"";
+  for (const char c : text) {
+    switch (c) {
+      case '"': s += "\\\""; break;
+      case '\\': s += "\\\\"; break;
+      case '\n': s += "\\n"; break;
+      case '\r': s += "\\r"; break;
+      case '\t': s += "\\t"; break;
+      default:
+        if (static_cast<unsigned char>(c) < 0x20) {
+          char buf[8];
+          std::snprintf(buf, sizeof buf, "\\u%04x", static_cast<unsigned>(static_cast<unsigned char>(c)));
+          s += buf;
+        } else {
+          s += c;
+        }
+    }
+  }
+  return s + '"';
 }
 
 }  // namespace edgeplane_examples

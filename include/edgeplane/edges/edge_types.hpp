@@ -75,16 +75,17 @@ struct corner {
   EDGEPLANE_HD bool operator()(const detail::neighbourhood& nb) const {
     if (nb.nl < n || nb.nr < n) return false;
     const float noise = noise_k * sigma(nb.zc);
-    float dev, len;
-    detail::arm_deviation(nb, -1, n, dev, len);
-    if (dev > t_arm * len + noise) return false;
-    detail::arm_deviation(nb, +1, n, dev, len);
-    if (dev > t_arm * len + noise) return false;
+    // The cheap test first (one distance): on flat surfaces c lies on the chord and we stop here.
     const int h = n / 2 > 0 ? n / 2 : 1;
     const detail::point3 a = nb.left(h), b = nb.right(h);
     const float chord = detail::norm(b - a);
     const float sag = sqrtf(detail::dist2_to_line(nb.center(), a, b));
-    return sag > t_bend * chord + noise;
+    if (!(sag > t_bend * chord + noise)) return false;
+    float dev, len;
+    detail::arm_deviation(nb, -1, n, dev, len);
+    if (dev > t_arm * len + noise) return false;
+    detail::arm_deviation(nb, +1, n, dev, len);
+    return !(dev > t_arm * len + noise);
   }
 };
 
@@ -109,15 +110,19 @@ struct curved {
     const float d3 = sqrtf(detail::dist2_to_line(nb.side(s, q3), c, e));
     return d1 >= 0.6f * dm && d3 >= 0.6f * dm;
   }
+  EDGEPLANE_HD bool straight(const detail::neighbourhood& nb, int s, float noise) const {
+    float dev, len;
+    detail::arm_deviation(nb, s, n, dev, len);
+    return dev <= t_straight * len + noise;
+  }
+  // Exactly one arm straight and the other arc-like: at most one side can be the bent one, so test
+  // each side's cheap arc shape (3 distances) first and scan the arms only where it holds.
   EDGEPLANE_HD bool operator()(const detail::neighbourhood& nb) const {
     if (nb.nl < n || nb.nr < n) return false;
     const float noise = noise_k * sigma(nb.zc);
-    float dl, ll, dr, lr;
-    detail::arm_deviation(nb, -1, n, dl, ll);
-    detail::arm_deviation(nb, +1, n, dr, lr);
-    const bool sl = dl <= t_straight * ll + noise, sr = dr <= t_straight * lr + noise;
-    if (sl == sr) return false;  // both straight (flat or corner) or both bent (inside a curve)
-    return arc_like(nb, sl ? +1 : -1, noise);
+    for (int s = -1; s <= 1; s += 2)
+      if (arc_like(nb, s, noise) && straight(nb, -s, noise) && !straight(nb, s, noise)) return true;
+    return false;
   }
 };
 
