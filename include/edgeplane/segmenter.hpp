@@ -348,7 +348,8 @@ class segmenter {
     out.times.validation = ms_since(t);
 
     // ---- 6. merging ----------------------------------------------------------------------------
-    const std::vector<int> group = merge_groups(fits_, keep_, p_);
+    merge_groups(fits_, keep_, p_, group_, merge_parent_);
+    const std::vector<int>& group = group_;
     int num_planes = 0;
     for (int g : group) num_planes = std::max(num_planes, g + 1);
     num_planes = std::min(num_planes, 65535);
@@ -473,6 +474,7 @@ class segmenter {
   std::vector<std::int32_t> host_bbox_;
   std::vector<plane_fit> fits_, group_fits_;
   std::vector<char> keep_, status_;
+  std::vector<int> group_, merge_parent_;
   std::vector<std::uint8_t> host_failed_;
   std::vector<std::uint16_t> host_table_;
   std::vector<float> host_planes_, host_tol_;

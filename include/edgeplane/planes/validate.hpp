@@ -37,13 +37,13 @@ inline bool should_merge(const plane_fit& a, const plane_fit& b, const params& p
   return std::abs(a.normal.dot(u)) / len < p.t_ps && std::abs(b.normal.dot(u)) / len < p.t_ps;
 }
 
-/// Merges plane fits: returns, for each input fit, the index of its group (0-based, groups are
-/// numbered by their first member); host union-find over the few candidates.  Only fits marked
-/// `keep` take part.
-inline std::vector<int> merge_groups(const std::vector<plane_fit>& fits, const std::vector<char>& keep,
-                                     const params& p) {
+/// Merges plane fits: writes, for each input fit, the index of its group into `group` (0-based,
+/// numbered in order of their first member; -1 for fits not marked `keep`).  Host union-find over
+/// the few candidates; `parent` is scratch.  The vectors keep their capacity across calls.
+inline void merge_groups(const std::vector<plane_fit>& fits, const std::vector<char>& keep, const params& p,
+                         std::vector<int>& group, std::vector<int>& parent) {
   const int n = static_cast<int>(fits.size());
-  std::vector<int> parent(n);
+  parent.resize(static_cast<std::size_t>(n));
   std::iota(parent.begin(), parent.end(), 0);
   auto find = [&](int x) {
     while (parent[x] != x) x = parent[x] = parent[parent[x]];
@@ -59,15 +59,20 @@ inline std::vector<int> merge_groups(const std::vector<plane_fit>& fits, const s
       }
     }
   }
-  std::vector<int> group(n, -1);
+  // roots are the smallest member, so numbering roots in index order numbers groups by first member
+  group.assign(static_cast<std::size_t>(n), -1);
   int next = 0;
-  std::vector<int> id(n, -1);
-  for (int i = 0; i < n; ++i) {
-    if (!keep[i]) continue;
-    const int r = find(i);
-    if (id[r] < 0) id[r] = next++;
-    group[i] = id[r];
-  }
+  for (int i = 0; i < n; ++i)
+    if (keep[i] && find(i) == i) group[i] = next++;
+  for (int i = 0; i < n; ++i)
+    if (keep[i]) group[i] = group[find(i)];
+}
+
+/// As above, returning the groups.
+inline std::vector<int> merge_groups(const std::vector<plane_fit>& fits, const std::vector<char>& keep,
+                                     const params& p) {
+  std::vector<int> group, parent;
+  merge_groups(fits, keep, p, group, parent);
   return group;
 }
 
