@@ -67,7 +67,7 @@ struct params {
   // ---- 5. merging and final labels -------------------------------------------------------------
   float t_par = 0.03f;       ///< parallel: |n1 x n2| < t_par
   float t_ps = 0.15f;        ///< coplanar: |n_i . (c2 - c1)/|c2 - c1|| < t_ps for both normals
-  int grow_iterations = 8;   ///< plane-guided growth into unlabelled pixels (0 = off)
+  int grow_iterations = 8;   ///< at most this many rounds of plane-guided growth (stops when a round adds nothing; 0 = off)
   float grow_k = 3.0f;       ///< a grown pixel lies within grow_k * sigma(z) of the plane
   int label_closing_radius = 1;  ///< final closing of the plane labels; 0 = off
 };
@@ -154,7 +154,8 @@ inline params kinect2() {
   p.t_length = 8;
   p.t_size = 300;
   p.t_ps = 0.08f;
-  p.split_rounds = 0;
+  p.t_residual = 1.0f;  // moments use the smoothed depth, whose residual is well under the raw sigma
+  p.grow_iterations = 128;
   return p;
 }
 

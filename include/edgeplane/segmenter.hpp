@@ -137,7 +137,7 @@ class segmenter {
            z_proc_.capacity_bytes() + z_smooth_.capacity_bytes() + edges_.capacity_bytes() + mask_.capacity_bytes() + cov_l_.capacity_bytes() +
            cov_r_.capacity_bytes() + parent_.capacity_bytes() + count_.capacity_bytes() + flags_.capacity_bytes() +
            scan_.capacity_bytes() + cand_.capacity_bytes() + failed_.capacity_bytes() + moments_.capacity_bytes() + bbox_.capacity_bytes() + table_.capacity_bytes() +
-           planes_.capacity_bytes() + tol_.capacity_bytes() + lab_a_.capacity_bytes() + lab_b_.capacity_bytes() + lab_c_.capacity_bytes() +
+           planes_.capacity_bytes() + tol_.capacity_bytes() + flag_.capacity_bytes() + lab_a_.capacity_bytes() + lab_b_.capacity_bytes() + lab_c_.capacity_bytes() +
            lab_full_.capacity_bytes();
   }
 
@@ -169,6 +169,7 @@ class segmenter {
     table_.set_backend(b_);
     planes_.set_backend(b_);
     tol_.set_backend(b_);
+    flag_.set_backend(b_);
     lab_a_.set_backend(b_);
     lab_b_.set_backend(b_);
     lab_c_.set_backend(b_);
@@ -407,9 +408,20 @@ class segmenter {
                              detail::candidate_image_labels{cand}, table_.data(), la});
     const detail::projector proj = detail::make_projector(kp);
     const detail::noise_sigma sigma = detail::make_noise(p_.noise);
+    // Growth stops early once a round assigns nothing (the flag is read every 4 rounds, so a device
+    // backend synchronizes rarely).
+    flag_.resize(1);
+    b_.memset(flag_.data(), 0, sizeof(std::int32_t));
     for (int it = 0; it < p_.grow_iterations && num_planes > 0; ++it) {
-      b_.for_each_index(n, detail::grow_kernel{z, la, lb, proj, sigma, p_.grow_k, planes_.data(), tol_.data()});
+      b_.for_each_index(n, detail::grow_kernel{z, la, lb, proj, sigma, p_.grow_k, planes_.data(), tol_.data(),
+                                               flag_.data()});
       std::swap(la, lb);
+      if (it % 4 == 3) {
+        std::int32_t changed = 0;
+        b_.copy_to_host(&changed, flag_.data(), sizeof(std::int32_t));
+        if (!changed) break;
+        b_.memset(flag_.data(), 0, sizeof(std::int32_t));
+      }
     }
     if (p_.label_closing_radius > 0 && num_planes > 0) {
       b_.for_each_index(n, detail::label_dilate_kernel{la, lb, p_.label_closing_radius});
@@ -468,6 +480,7 @@ class segmenter {
   buffer<std::int32_t, Backend> bbox_;
   buffer<std::uint16_t, Backend> table_;
   buffer<float, Backend> planes_, tol_;
+  buffer<std::int32_t, Backend> flag_;
   buffer<std::uint16_t, Backend> lab_a_, lab_b_, lab_c_, lab_full_;
   // host scratch, reused across frames
   std::vector<std::uint64_t> host_moments_, group_moments_;

@@ -3,6 +3,7 @@
 #pragma once
 #include <cstdint>
 
+#include "edgeplane/backend/atomic.hpp"
 #include "edgeplane/config.hpp"
 #include "edgeplane/detail/geometry.hpp"
 #include "edgeplane/image.hpp"
@@ -34,6 +35,7 @@ struct grow_kernel {
   float k;
   const float* planes;
   const float* cap;
+  std::int32_t* changed;  // set to 1 when any pixel is assigned (relaxed atomic store)
   EDGEPLANE_HD void operator()(std::int64_t i) const {
     const int x = static_cast<int>(i % in.width), y = static_cast<int>(i / in.width);
     const std::uint16_t cur = in(x, y);
@@ -61,6 +63,7 @@ struct grow_kernel {
       }
     }
     out(x, y) = best;
+    if (best != 0) atomic_store(changed, 1);
   }
 };
 
