@@ -3,6 +3,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <string>
+#include <type_traits>
 
 #include "edgeplane/config.hpp"
 #include "edgeplane/error.hpp"
@@ -22,8 +23,13 @@ struct image_view {
   EDGEPLANE_HD bool contains(int x, int y) const { return x >= 0 && y >= 0 && x < width && y < height; }
   EDGEPLANE_HD std::int64_t pixels() const { return static_cast<std::int64_t>(width) * height; }
   EDGEPLANE_HD bool empty() const { return width <= 0 || height <= 0; }
-  /// Implicit conversion to a view of const elements.
-  EDGEPLANE_HD operator image_view<const T>() const { return {data, width, height, pitch}; }
+  /// Implicit conversion to a view of const elements (a template, so that it does not exist, and
+  /// nvcc does not warn about it, for views that are already const).
+  template <class U = T>
+    requires(std::is_same_v<U, T> && !std::is_const_v<U>)
+  EDGEPLANE_HD operator image_view<const U>() const {
+    return {data, width, height, pitch};
+  }
 };
 
 /// Make a view; pitch defaults to the width (a dense image).

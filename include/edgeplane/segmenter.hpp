@@ -250,8 +250,11 @@ class segmenter {
     if constexpr (!Backend::host_accessible) {
       raw_in_.resize(n_full * sizeof(In));
       In* dst = reinterpret_cast<In*>(raw_in_.data());
-      for (int y = 0; y < h; ++y)
-        b_.copy_from_host(dst + static_cast<std::int64_t>(y) * w, &depth_in(0, y), sizeof(In) * w);
+      if (depth_in.pitch == w)  // dense: one copy
+        b_.copy_from_host(dst, depth_in.data, sizeof(In) * n_full);
+      else
+        for (int y = 0; y < h; ++y)
+          b_.copy_from_host(dst + static_cast<std::int64_t>(y) * w, &depth_in(0, y), sizeof(In) * w);
       src = image_view<const In>{dst, w, h, w};
     }
     const auto za = view(z_a_.data(), w, h), zb = view(z_b_.data(), w, h), zc = view(z_c_.data(), w, h);
@@ -460,9 +463,12 @@ class segmenter {
       pl.bbox = f.bbox;
       out.planes.push_back(pl);
     }
-    for (int y = 0; y < h; ++y)
-      b_.copy_to_host(&labels_out(0, y), final_labels.data + static_cast<std::int64_t>(y) * w,
-                      sizeof(std::uint16_t) * w);
+    if (labels_out.pitch == w)  // dense: one copy
+      b_.copy_to_host(labels_out.data, final_labels.data, sizeof(std::uint16_t) * n_full);
+    else
+      for (int y = 0; y < h; ++y)
+        b_.copy_to_host(&labels_out(0, y), final_labels.data + static_cast<std::int64_t>(y) * w,
+                        sizeof(std::uint16_t) * w);
     b_.synchronize();
     out.times.finalize = ms_since(t);
     out.times.total = std::chrono::duration<double, std::milli>(clock::now() - t0).count();
