@@ -159,7 +159,7 @@ void convert_depth(const Backend& b, image_view<const In> in, float scale, float
 
 /// The closing filter (dilate, then erode, square window of half-size r) restricted to invalid
 /// pixels: fills pepper holes narrower than the window and leaves valid depth untouched.
-/// `scratch` must be the size of the image; `depth` is filtered in place.
+/// `scratch` and `out` must be the size of the image (`out` may be `depth` itself).
 template <class Backend>
 void close_depth(const Backend& b, image_view<float> depth, image_view<float> scratch, image_view<float> out, int r) {
   detail::check_same_size(depth, scratch, "depth", "scratch");

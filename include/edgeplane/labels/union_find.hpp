@@ -13,8 +13,12 @@
 // - unite() changes a root only by CAS(parent[r], r, s) with s < r.  If another thread hooked r
 //   first, the CAS fails and the loop retries from the new root; no hook is lost, and since every
 //   hook points to a smaller index, no cycle can form.
-// - flatten() runs after all unions (a separate launch), when parents no longer change.
+// - flatten() runs after all unions (a separate launch).  It must NOT halve paths: a halving write
+//   to parent[x] could land after x's own flatten stored its root and leave x pointing at a
+//   non-root.  So it walks to the root with loads only and writes parent[i] alone; a concurrent
+//   reader of parent[i] sees either i's old parent or its root, both of which lead to the root.
 #pragma once
+#include <cmath>
 #include <cstdint>
 
 #include "edgeplane/backend/atomic.hpp"
@@ -74,11 +78,21 @@ struct uf_union_kernel {
   }
 };
 
-/// parent[i] = root of i (after all unions).
+/// Root of x by loads only (no path halving).
+EDGEPLANE_HD inline std::int32_t uf_root(const std::int32_t* parent, std::int32_t x) {
+  std::int32_t p = atomic_load(parent + x);
+  while (p != x) {
+    x = p;
+    p = atomic_load(parent + x);
+  }
+  return x;
+}
+
+/// parent[i] = root of i (after all unions; see the note at the top on why this does not halve).
 struct uf_flatten_kernel {
   std::int32_t* parent;
   EDGEPLANE_HD void operator()(std::int64_t i) const {
-    if (parent[i] >= 0) parent[i] = uf_find(parent, static_cast<std::int32_t>(i));
+    if (atomic_load(parent + i) >= 0) atomic_store(parent + i, uf_root(parent, static_cast<std::int32_t>(i)));
   }
 };
 

@@ -11,13 +11,14 @@
 
 namespace edgeplane {
 
-/// A candidate is a plane when it has at least t_size points, strictly ordered PCA eigenvalues
-/// l1 > l2 > l3 with l3/l1 < t_cu and l3/l2 < t_cu, and (when t_residual > 0) a residual
+/// A candidate is a plane when it has at least t_size points, PCA eigenvalues l1 >= l2 > l3 (the
+/// thesis writes l1 > l2 > l3; a square patch seen head-on has l1 == l2 and is still a plane) with
+/// l3/l1 < t_cu and l3/l2 < t_cu, and (when t_residual > 0) a residual
 /// sqrt(l3) below t_residual times the sensor noise at its mean depth.
 inline bool is_plane(const plane_fit& f, const params& p) {
   if (f.points < p.t_size) return false;
   const double l1 = f.eigenvalues(0), l2 = f.eigenvalues(1), l3 = f.eigenvalues(2);
-  if (!(l1 > l2 && l2 > l3) || !(l2 > 0)) return false;
+  if (!(l1 >= l2 && l2 > l3) || !(l2 > 0)) return false;
   if (!(l3 / l1 < p.t_cu && l3 / l2 < p.t_cu)) return false;
   if (p.t_residual > 0) {
     const double z = std::abs(f.centroid.z());

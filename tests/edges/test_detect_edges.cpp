@@ -1,0 +1,186 @@
+// Tests of include/edgeplane/edges/detect_edges.hpp: the fused detector against the per-(direction,
+// type) kernels, the use_* switches, invalid pixels, and the closing of the edge map.
+#include <doctest/doctest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include "edgeplane/edges/detect_edges.hpp"
+#include "support/test_backends.hpp"
+
+using namespace edgeplane;
+using namespace edgeplane_test;
+
+namespace {
+
+/// A 64 x 48 scene with every kind of structure: a slanted plane, a 30 cm step, a 90 degree roof,
+/// a 5 cm spike, a small arc, a hole of invalid pixels, and 1 mm noise.
+std::vector<float> mixed_scene(int w, int h, const intrinsics& k) {
+  std::vector<float> z(static_cast<std::size_t>(w) * h);
+  lcg_noise noise(3);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      double v = plane_depth(k, x, y, normalized({0.1, -0.2, -1.0}), 1.8);
+      if (x >= 40) v += 0.3;                                              // step
+      if (y >= 30 && x < 40) v += 0.004 * std::abs(x + y - 50);           // roof-like crease along x + y = 50
+      if (x == 20 && y == 12) v -= 0.05;                                  // spike
+      if (y < 10 && x >= 10 && x < 30) v += 0.02 * std::sqrt(std::max(0, x - 10)); // bend
+      z[static_cast<std::size_t>(y) * w + x] = static_cast<float>(v) + noise(0.001f);
+    }
+  for (int y = 20; y < 24; ++y)
+    for (int x = 50; x < 55; ++x) z[static_cast<std::size_t>(y) * w + x] = 0.f;  // hole
+  return z;
+}
+
+template <class D, class T, class B>
+void or_kernel(const B& b, const device_array<float, B>& z, int w, int h, const intrinsics& k, const T& t,
+               device_array<std::uint8_t, B>& e) {
+  detect_edge<D>(b, z.cview(w, h), k, t, e.view(w, h));
+}
+
+template <class T, class B>
+std::vector<std::uint8_t> all_directions(const B& b, const device_array<float, B>& z, int w, int h,
+                                         const intrinsics& k, const T& t) {
+  device_array<std::uint8_t, B> e(b, static_cast<std::size_t>(w) * h, 0);
+  or_kernel<direction::horizontal>(b, z, w, h, k, t, e);
+  or_kernel<direction::vertical>(b, z, w, h, k, t, e);
+  or_kernel<direction::left_diagonal>(b, z, w, h, k, t, e);
+  or_kernel<direction::right_diagonal>(b, z, w, h, k, t, e);
+  return e.host();
+}
+
+}  // namespace
+
+TEST_CASE_TEMPLATE("detect_edges equals the OR of the per-(direction, type) kernels, type by type", B,
+                   EDGEPLANE_TEST_BACKENDS) {
+  const int w = 64, h = 48;
+  const auto k = camera(w, h);
+  const auto scene = mixed_scene(w, h, k);
+  for (params p : {presets::thesis_full(), presets::thesis_half(), presets::kinect360()}) {
+    p.noise_k = 0.5f;  // small allowance: every type fires somewhere on this scene
+    const auto set = detail::make_edge_set(p);
+    for (const B& b : variants<B>()) {
+      CAPTURE(variant_name(b));
+      device_array<float, B> z(b, scene);
+      device_array<std::uint8_t, B> fused(b, scene.size(), 0xA5);  // every pixel must be written
+      detect_edges(b, z.cview(w, h), k, p, fused.view(w, h));
+      const auto f = fused.host();
+      const std::vector<std::uint8_t> per_type[4] = {
+          all_directions(b, z, w, h, k, set.jump), all_directions(b, z, w, h, k, set.extrema),
+          all_directions(b, z, w, h, k, set.corner), all_directions(b, z, w, h, k, set.curved)};
+      const std::uint8_t bits[4] = {edge_jump, edge_extrema, edge_corner, edge_curved};
+      for (int t = 0; t < 4; ++t) {
+        CAPTURE(t);
+        int fired = 0, mismatches = 0;
+        for (std::size_t i = 0; i < f.size(); ++i) {
+          if (scene[i] == 0.f) continue;
+          const bool a = (f[i] & bits[t]) != 0, c = (per_type[t][i] & bits[t]) != 0;
+          fired += a ? 1 : 0;
+          mismatches += a != c ? 1 : 0;
+        }
+        CHECK(mismatches == 0);
+        CHECK(fired > 0);  // the comparison is not vacuous
+      }
+      for (std::size_t i = 0; i < f.size(); ++i) {
+        if (scene[i] == 0.f)
+          REQUIRE(f[i] == edge_invalid);
+        else
+          REQUIRE((f[i] & ~(edge_jump | edge_extrema | edge_corner | edge_curved)) == 0);
+      }
+    }
+  }
+}
+
+TEST_CASE_TEMPLATE("detect_edges: a disabled edge type never fires; detect_edge ORs into the map", B,
+                   EDGEPLANE_TEST_BACKENDS) {
+  const int w = 64, h = 48;
+  const auto k = camera(w, h);
+  const auto scene = mixed_scene(w, h, k);
+  const B b{};
+  device_array<float, B> z(b, scene);
+  params p = presets::thesis_full();
+  p.noise_k = 0.5f;
+  p.use_jump = false;
+  p.use_corner = false;
+  device_array<std::uint8_t, B> e(b, scene.size(), 0);
+  detect_edges(b, z.cview(w, h), k, p, e.view(w, h));
+  int extrema = 0;
+  for (auto v : e.host()) {
+    CHECK((v & (edge_jump | edge_corner)) == 0);
+    extrema += v & edge_extrema ? 1 : 0;
+  }
+  CHECK(extrema > 0);
+  // detect_edge keeps the bits already in the map (the caller clears it).
+  device_array<std::uint8_t, B> marked(b, scene.size(), 0x80);
+  detect_edge<direction::horizontal>(b, z.cview(w, h), k, detail::make_edge_set(p).jump, marked.view(w, h));
+  for (auto v : marked.host()) REQUIRE((v & 0x80) != 0);
+}
+
+TEST_CASE_TEMPLATE("detect_edges: a step seen by the fused detector marks exactly the two columns beside it", B,
+                   EDGEPLANE_TEST_BACKENDS) {
+  const int w = 40, h = 30, x0 = 20;
+  const auto k = camera(w, h);
+  std::vector<float> z(static_cast<std::size_t>(w) * h);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) z[static_cast<std::size_t>(y) * w + x] = x < x0 ? 1.5f : 2.0f;
+  for (const B& b : variants<B>()) {
+    device_array<float, B> zd(b, z);
+    device_array<std::uint8_t, B> e(b, z.size(), 0);
+    detect_edges(b, zd.cview(w, h), k, presets::thesis_full(), e.view(w, h));
+    const auto out = e.host();
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        CAPTURE(x);
+        CAPTURE(y);
+        CHECK(((out[static_cast<std::size_t>(y) * w + x] & edge_jump) != 0) == (x == x0 - 1 || x == x0));
+      }
+  }
+}
+
+TEST_CASE_TEMPLATE("close_edges: bridges a 1- and 2-pixel gap in an edge line, not a 3-pixel one, nor thickens it",
+                   B, EDGEPLANE_TEST_BACKENDS) {
+  const int w = 24, h = 30, lx = 12;
+  // A vertical edge line at x = 12 with gaps at y = 5 (1 px), y = 12..13 (2 px), y = 20..22 (3 px).
+  auto in_gap = [](int y) { return y == 5 || y == 12 || y == 13 || (y >= 20 && y <= 22); };
+  std::vector<std::uint8_t> edges(static_cast<std::size_t>(w) * h, 0);
+  for (int y = 0; y < h; ++y)
+    if (!in_gap(y)) edges[static_cast<std::size_t>(y) * w + lx] = edge_corner;
+  edges[3 * w + 3] = edge_invalid;  // an isolated invalid pixel stays in the mask
+  for (const B& b : variants<B>()) {
+    CAPTURE(variant_name(b));
+    device_array<std::uint8_t, B> e(b, edges), scratch(b, edges.size(), 0), mask(b, edges.size(), 7);
+    close_edges(b, e.cview(w, h), scratch.view(w, h), mask.view(w, h), 1);
+    const auto m = mask.host();
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        CAPTURE(x);
+        CAPTURE(y);
+        const std::uint8_t v = m[static_cast<std::size_t>(y) * w + x];
+        if (x == 3 && y == 3)
+          CHECK(v == 1);
+        else if (x != lx)
+          CHECK(v == 0);  // the line is not thickened
+        else
+          CHECK(v == ((y >= 20 && y <= 22) ? 0 : 1));
+      }
+    // r = 0: the mask is "any bit set".
+    close_edges(b, e.cview(w, h), scratch.view(w, h), mask.view(w, h), 0);
+    const auto m0 = mask.host();
+    for (std::size_t i = 0; i < m0.size(); ++i) REQUIRE(m0[i] == (edges[i] != 0 ? 1 : 0));
+  }
+}
+
+TEST_CASE_TEMPLATE("close_edges: an edge line ending at the image border is kept to the border", B,
+                   EDGEPLANE_TEST_BACKENDS) {
+  const int w = 16, h = 10;
+  std::vector<std::uint8_t> edges(static_cast<std::size_t>(w) * h, 0);
+  for (int x = 0; x < w; ++x) edges[static_cast<std::size_t>(0) * w + x] = edge_jump;  // the top row
+  for (int y = 0; y < h; ++y) edges[static_cast<std::size_t>(y) * w + 7] = edge_jump;  // a column to the bottom
+  const B b{};
+  device_array<std::uint8_t, B> e(b, edges), scratch(b, edges.size(), 0), mask(b, edges.size(), 0);
+  close_edges(b, e.cview(w, h), scratch.view(w, h), mask.view(w, h), 1);
+  const auto m = mask.host();
+  for (std::size_t i = 0; i < m.size(); ++i) CHECK(m[i] == (edges[i] != 0 ? 1 : 0));
+}

@@ -1,0 +1,207 @@
+// Tests of include/edgeplane/filters/depth.hpp: conversion to metres, the hole-filling closing,
+// the 2x downscale and the edge-preserving smoothing.
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+#include "edgeplane/filters/depth.hpp"
+#include "support/test_backends.hpp"
+
+using namespace edgeplane;
+using namespace edgeplane_test;
+
+namespace {
+constexpr float nan_f = std::numeric_limits<float>::quiet_NaN();
+constexpr float inf_f = std::numeric_limits<float>::infinity();
+
+/// A slanted plane (valid everywhere) with the given pixels set to 0.
+std::vector<float> plane_with_holes(int w, int h, const std::vector<std::pair<int, int>>& holes) {
+  auto z = plane_image(camera(w, h), w, h, normalized({0.2, -0.1, -1.0}), 2.0);
+  for (auto [x, y] : holes) z[static_cast<std::size_t>(y) * w + x] = 0.f;
+  return z;
+}
+
+template <class B>
+std::vector<float> closed(const B& b, const std::vector<float>& in, int w, int h, int r) {
+  device_array<float, B> z(b, in), scratch(b, in.size(), -1.f), out(b, in.size(), -1.f);
+  close_depth(b, z.view(w, h), scratch.view(w, h), out.view(w, h), r);
+  return out.host();
+}
+
+std::vector<std::pair<int, int>> block(int x0, int y0, int bw, int bh) {
+  std::vector<std::pair<int, int>> v;
+  for (int y = y0; y < y0 + bh; ++y)
+    for (int x = x0; x < x0 + bw; ++x) v.push_back({x, y});
+  return v;
+}
+}  // namespace
+
+TEST_CASE_TEMPLATE("convert_depth: uint16 units times scale, out-of-range units become 0", B, EDGEPLANE_TEST_BACKENDS) {
+  for (const B& b : variants<B>()) {
+    CAPTURE(variant_name(b));
+    // 4 x 2 input with a row pitch of 6 elements (the padding must never be read as pixels).
+    const std::vector<std::uint16_t> raw = {0, 1000, 65535, 40, 7, 7,  //
+                                            50, 500, 20000, 20001, 7, 7};
+    device_array<std::uint16_t, B> in(b, raw);
+    device_array<float, B> out(b, 8, -1.f);
+    convert_depth(b, image_view<const std::uint16_t>{in.data(), 4, 2, 6}, 0.001f, 0.05f, 20.f, out.view(4, 2));
+    const auto z = out.host();
+    const std::vector<float> want = {0.f, 1.0f, 0.f, 0.f,  // 0 invalid, 65.535 m too far, 0.04 m too near
+                                     0.05f, 0.5f, 20.f, 0.f};  // bounds inclusive; 20.001 m too far
+    for (int i = 0; i < 8; ++i) {
+      CAPTURE(i);
+      CHECK(z[i] == doctest::Approx(want[i]).epsilon(1e-6));
+    }
+  }
+}
+
+TEST_CASE_TEMPLATE("convert_depth: float 0, NaN, infinities, negatives and too far become 0", B,
+                   EDGEPLANE_TEST_BACKENDS) {
+  for (const B& b : variants<B>()) {
+    CAPTURE(variant_name(b));
+    const std::vector<float> raw = {0.f, nan_f, inf_f, -inf_f, -1.f, 25.f, 0.01f, 2.5f};
+    device_array<float, B> in(b, raw), out(b, raw.size(), -1.f);
+    convert_depth(b, in.cview(4, 2), 1.f, 0.05f, 20.f, out.view(4, 2));
+    const std::vector<float> want = {0, 0, 0, 0, 0, 0, 0, 2.5f};
+    CHECK(out.host() == want);
+  }
+}
+
+TEST_CASE_TEMPLATE("convert_depth: a non-positive or non-finite scale is an error", B, EDGEPLANE_TEST_BACKENDS) {
+  const B b{};
+  device_array<std::uint16_t, B> in(b, 4, 1000);
+  device_array<float, B> out(b, 4, 0.f);
+  CHECK_THROWS_AS(convert_depth(b, in.cview(2, 2), 0.f, 0.05f, 20.f, out.view(2, 2)), edgeplane::error);
+  CHECK_THROWS_AS(convert_depth(b, in.cview(2, 2), nan_f, 0.05f, 20.f, out.view(2, 2)), edgeplane::error);
+  CHECK_THROWS_AS(convert_depth(b, in.cview(2, 2), 0.001f, 0.05f, 20.f, out.view(1, 2)), edgeplane::error);
+}
+
+TEST_CASE_TEMPLATE("close_depth (r = 1) fills 1x1, 2x2 and 1xN holes, not 3x3 or 5x5 ones, never moves valid depth", B,
+                   EDGEPLANE_TEST_BACKENDS) {
+  const int w = 40, h = 30;
+  const auto truth = plane_image(camera(w, h), w, h, normalized({0.2, -0.1, -1.0}), 2.0);
+  struct hole_case {
+    const char* name;
+    std::vector<std::pair<int, int>> pixels;
+    bool filled;
+  };
+  std::vector<std::pair<int, int>> line;
+  for (int x = 10; x < 25; ++x) line.push_back({x, 15});  // a 1-pixel-wide crack, 15 pixels long
+  const std::vector<hole_case> cases = {{"1x1", block(7, 9, 1, 1), true},
+                                        {"2x2", block(20, 8, 2, 2), true},
+                                        {"1x15 crack", line, true},
+                                        {"3x3", block(5, 20, 3, 3), false},
+                                        {"5x5", block(30, 20, 5, 5), false}};
+  for (const B& b : variants<B>()) {
+    CAPTURE(variant_name(b));
+    for (const auto& c : cases) {
+      CAPTURE(c.name);
+      const auto in = plane_with_holes(w, h, c.pixels);
+      const auto out = closed(b, in, w, h, 1);
+      for (std::size_t i = 0; i < in.size(); ++i)
+        if (in[i] > 0.f) REQUIRE(out[i] == in[i]);  // valid pixels are never changed, bit for bit
+      for (auto [x, y] : c.pixels) {
+        CAPTURE(x);
+        CAPTURE(y);
+        const float z = out[static_cast<std::size_t>(y) * w + x];
+        if (c.filled) {  // a filled hole takes a depth of its 3x3 surroundings on the plane
+          CHECK(z > 0.f);
+          CHECK(std::abs(z - truth[static_cast<std::size_t>(y) * w + x]) < 0.01f);
+        } else {
+          CHECK(z == 0.f);
+        }
+      }
+    }
+  }
+}
+
+TEST_CASE_TEMPLATE("close_depth: a larger window fills a wider hole; r = 0 changes nothing; in place works", B,
+                   EDGEPLANE_TEST_BACKENDS) {
+  const int w = 40, h = 30;
+  const B b{};
+  const auto in = plane_with_holes(w, h, block(10, 10, 3, 3));
+  const auto r2 = closed(b, in, w, h, 2);
+  for (auto [x, y] : block(10, 10, 3, 3)) CHECK(r2[static_cast<std::size_t>(y) * w + x] > 0.f);
+  CHECK(closed(b, in, w, h, 0) == in);
+  // The doc says `depth` is filtered in place: passing it as the output must give the same result.
+  device_array<float, B> z(b, in), scratch(b, in.size(), 0.f);
+  close_depth(b, z.view(w, h), scratch.view(w, h), z.view(w, h), 2);
+  CHECK(z.host() == r2);
+}
+
+TEST_CASE_TEMPLATE("downscale_depth: a block straddling a depth edge takes the near surface", B,
+                   EDGEPLANE_TEST_BACKENDS) {
+  // Five 2x2 blocks side by side, plus an odd last column and row that are dropped.
+  const int w = 11, h = 3;
+  std::vector<float> in(static_cast<std::size_t>(w) * h, 9.f);
+  auto set_block = [&](int bx, float a, float c, float d, float e) {
+    in[2 * bx] = a;
+    in[2 * bx + 1] = c;
+    in[w + 2 * bx] = d;
+    in[w + 2 * bx + 1] = e;
+  };
+  set_block(0, 1.0f, 3.0f, 1.0f, 3.0f);    // depth edge: near surface 1.0 (the mean would be 2.0)
+  set_block(1, 2.0f, 2.02f, 2.01f, 2.03f); // one surface: the mean of all four
+  set_block(2, 0.f, 1.5f, 0.f, 0.f);       // one valid pixel
+  set_block(3, 0.f, 0.f, 0.f, 0.f);        // nothing valid
+  set_block(4, 4.0f, 1.0f, 1.01f, 0.f);    // edge and a hole: the mean of the near pair
+  for (const B& b : variants<B>()) {
+    CAPTURE(variant_name(b));
+    device_array<float, B> zin(b, in), zout(b, 5, -1.f);
+    downscale_depth(b, zin.cview(w, h), zout.view(5, 1));
+    const auto z = zout.host();
+    CHECK(z[0] == doctest::Approx(1.0f));
+    CHECK(z[1] == doctest::Approx(2.015f));
+    CHECK(z[2] == doctest::Approx(1.5f));
+    CHECK(z[3] == 0.f);
+    CHECK(z[4] == doctest::Approx(1.005f));
+    CHECK_THROWS_AS(downscale_depth(b, zin.cview(w, h), zout.view(4, 1)), edgeplane::error);
+  }
+}
+
+TEST_CASE_TEMPLATE("smooth_depth: reduces noise on a plane and keeps a depth step sharp", B, EDGEPLANE_TEST_BACKENDS) {
+  const int w = 48, h = 36, step_x = 24, r = 2;
+  const float k = 2.5f, s0 = 0.0015f, s2 = 0.0015f;  // the default noise model: sigma(2 m) = 7.5 mm
+  const auto cam = camera(w, h);
+  const vec3 n = normalized({0.15, -0.1, -1.0});
+  // Left: the plane at d = 2 m; right: the same plane 0.3 m farther (a step); 3 mm uniform noise.
+  std::vector<float> truth(static_cast<std::size_t>(w) * h), noisy(truth.size());
+  lcg_noise noise(7);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const std::size_t i = static_cast<std::size_t>(y) * w + x;
+      truth[i] = plane_depth(cam, x, y, n, x < step_x ? 2.0 : 2.3);
+      noisy[i] = truth[i] + noise(0.003f);
+    }
+  noisy[5 * w + 5] = 0.f;  // an invalid pixel stays invalid
+  for (const B& b : variants<B>()) {
+    CAPTURE(variant_name(b));
+    device_array<float, B> zin(b, noisy), zout(b, noisy.size(), -1.f);
+    smooth_depth(b, zin.cview(w, h), zout.view(w, h), r, k, s0, s2);
+    const auto out = zout.host();
+    CHECK(out[5 * w + 5] == 0.f);
+    double var_in = 0, var_out = 0;
+    int n_in = 0;
+    for (int y = r; y < h - r; ++y)
+      for (int x = r; x < w - r; ++x) {
+        const std::size_t i = static_cast<std::size_t>(y) * w + x;
+        if (noisy[i] == 0.f) continue;
+        // Every output stays on its own side of the step (no depth between the two surfaces).
+        CHECK(std::abs(out[i] - truth[i]) < 0.01f);
+        if (std::abs(x - step_x) > r && std::abs(x - 5) + std::abs(y - 5) > 2 * r) {  // away from step/hole
+          var_in += (noisy[i] - truth[i]) * (noisy[i] - truth[i]);
+          var_out += (out[i] - truth[i]) * (out[i] - truth[i]);
+          ++n_in;
+        }
+      }
+    // 3 mm uniform noise: variance 3 mm^2; a 5x5 mean divides it by about 25.  Demand 8x.
+    CHECK(n_in > 500);
+    CHECK(var_out * 8 < var_in);
+    // The step stays a step: the two columns beside it still differ by the full 0.3 m (minus noise).
+    for (int y = 0; y < h; ++y)
+      CHECK(out[static_cast<std::size_t>(y) * w + step_x] - out[static_cast<std::size_t>(y) * w + step_x - 1] > 0.28f);
+  }
+}

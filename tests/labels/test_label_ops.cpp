@@ -1,0 +1,217 @@
+// Tests of include/edgeplane/labels/label_ops.hpp: relabelling, plane-guided growth, the label
+// closing and nearest-neighbour upsampling.
+#include <doctest/doctest.h>
+
+#include <algorithm>
+#include <cstdint>
+#include <vector>
+
+#include "edgeplane/labels/label_ops.hpp"
+#include "edgeplane/params.hpp"
+#include "support/test_backends.hpp"
+
+using namespace edgeplane;
+using namespace edgeplane_test;
+
+namespace {
+
+/// Source of candidate ids for relabel_kernel: a plain array.
+struct array_source {
+  const std::uint16_t* ids;
+  std::int32_t operator()(std::int64_t i) const { return ids[i]; }
+};
+
+std::size_t at(int w, int x, int y) { return static_cast<std::size_t>(y) * w + x; }
+
+/// One growth step over labels `in` (host vectors in, host vector out).  `caps` holds each plane's
+/// own tolerance (metres, index 0 unused); empty = no cap.  `changed` receives the kernel's flag.
+template <class B>
+std::vector<std::uint16_t> grow_once(const B& b, const std::vector<float>& depth, const std::vector<std::uint16_t>& in,
+                                     int w, int h, const std::vector<float>& planes, std::vector<float> caps = {},
+                                     std::int32_t* changed = nullptr) {
+  const params p = presets::thesis_full();  // grow_k = 3: tolerance 3 sigma(2 m) = 22.5 mm
+  if (caps.empty()) caps.assign(planes.size() / 4, 1e9f);
+  device_array<float, B> z(b, depth), pl(b, planes), cp(b, caps);
+  device_array<std::uint16_t, B> li(b, in), lo(b, in.size(), 0xBEEF);
+  device_array<std::int32_t, B> flag(b, 1, 0);
+  b.for_each_index(static_cast<std::int64_t>(w) * h,
+                   detail::grow_kernel{z.cview(w, h), li.cview(w, h), lo.view(w, h), detail::make_projector(camera(w, h)),
+                                       detail::make_noise(p.noise), p.grow_k, pl.data(), cp.data(), flag.data()});
+  if (changed) *changed = flag.host()[0];
+  return lo.host();
+}
+
+template <class B>
+std::vector<std::uint16_t> close_labels(const B& b, const std::vector<std::uint16_t>& in, int w, int h, int r) {
+  device_array<std::uint16_t, B> li(b, in), dil(b, in.size(), 0), out(b, in.size(), 0xBEEF);
+  const auto n = static_cast<std::int64_t>(w) * h;
+  b.for_each_index(n, detail::label_dilate_kernel{li.cview(w, h), dil.view(w, h), r});
+  b.for_each_index(n, detail::label_erode_kernel{li.cview(w, h), dil.cview(w, h), out.view(w, h), r});
+  return out.host();
+}
+
+}  // namespace
+
+TEST_CASE_TEMPLATE("relabel_kernel maps every pixel through the table", B, EDGEPLANE_TEST_BACKENDS) {
+  const int w = 9, h = 8;
+  std::vector<std::uint16_t> ids(static_cast<std::size_t>(w) * h);
+  for (std::size_t i = 0; i < ids.size(); ++i) ids[i] = static_cast<std::uint16_t>(i % 4);
+  const std::vector<std::uint16_t> table = {0, 5, 5, 2};  // candidates 1 and 2 merged, 3 renamed
+  for (const B& b : variants<B>()) {
+    device_array<std::uint16_t, B> src(b, ids), tab(b, table), out(b, ids.size(), 0xBEEF);
+    b.for_each_index(w * h, detail::relabel_kernel<array_source>{array_source{src.data()}, tab.data(), out.view(w, h)});
+    const auto o = out.host();
+    for (std::size_t i = 0; i < o.size(); ++i) REQUIRE(o[i] == table[ids[i]]);
+  }
+}
+
+TEST_CASE_TEMPLATE("grow_kernel: a pixel on the plane joins, one off it does not, growth is one pixel a step", B,
+                   EDGEPLANE_TEST_BACKENDS) {
+  const int w = 12, h = 8;
+  std::vector<float> depth(static_cast<std::size_t>(w) * h, 2.0f);  // the plane z = 2: n = (0, 0, -1), d = 2
+  depth[at(w, 6, 2)] = 2.05f;    // 5 cm off the plane (tolerance 22.5 mm)
+  depth[at(w, 6, 3)] = 2.015f;   // 15 mm off: within tolerance
+  depth[at(w, 6, 5)] = 0.f;      // invalid depth never grows
+  std::vector<std::uint16_t> labels(depth.size(), 0);
+  for (int y = 0; y < 6; ++y)
+    for (int x = 0; x < 6; ++x) labels[at(w, x, y)] = 1;
+  const std::vector<float> planes = {0, 0, 0, 0, 0, 0, -1, 2};
+  for (const B& b : variants<B>()) {
+    CAPTURE(variant_name(b));
+    std::int32_t changed = -1;
+    const auto out = grow_once(b, depth, labels, w, h, planes, {}, &changed);
+    CHECK(changed == 1);
+    // A second step from the grown labels grows further; a step that assigns nothing leaves the flag 0.
+    const auto out2 = grow_once(b, depth, out, w, h, planes, {}, &changed);
+    CHECK(changed == 1);
+    CHECK(out2[at(w, 7, 0)] == 1);
+    std::vector<std::uint16_t> none(labels.size(), 0);
+    CHECK(grow_once(b, depth, none, w, h, planes, {}, &changed) == none);
+    CHECK(changed == 0);
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        CAPTURE(x);
+        CAPTURE(y);
+        std::uint16_t want = labels[at(w, x, y)];
+        if (x == 6 && y < 6 && y != 2 && y != 5) want = 1;  // the column beside the region, on the plane
+        if (x < 6 && y == 6) want = 1;                      // the row below it
+        CHECK(out[at(w, x, y)] == want);                    // (6, 6) touches the region only diagonally
+      }
+  }
+}
+
+TEST_CASE_TEMPLATE("grow_kernel: a pixel between two regions takes the nearer plane", B, EDGEPLANE_TEST_BACKENDS) {
+  const int w = 9, h = 3;
+  // Left region (label 1): the plane z = 2.000; right region (label 2): the plane z = 2.010.  The
+  // middle column is unlabelled with depths 2.002 (nearer 1), 2.008 (nearer 2), 2.009 (nearer 2).
+  std::vector<float> depth(static_cast<std::size_t>(w) * h);
+  std::vector<std::uint16_t> labels(depth.size(), 0);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      depth[at(w, x, y)] = x < 4 ? 2.0f : 2.01f;
+      labels[at(w, x, y)] = x < 4 ? 1 : x > 4 ? 2 : 0;
+    }
+  depth[at(w, 4, 0)] = 2.002f;
+  depth[at(w, 4, 1)] = 2.008f;
+  depth[at(w, 4, 2)] = 2.009f;
+  const std::vector<float> planes = {0, 0, 0, 0, 0, 0, -1, 2.0f, 0, 0, -1, 2.01f};
+  for (const B& b : variants<B>()) {
+    const auto out = grow_once(b, depth, labels, w, h, planes);
+    CHECK(out[at(w, 4, 0)] == 1);
+    CHECK(out[at(w, 4, 1)] == 2);
+    CHECK(out[at(w, 4, 2)] == 2);
+    // Swapping which side holds which label must not change the choice of plane.
+    std::vector<std::uint16_t> swapped = labels;
+    for (auto& l : swapped) l = l == 0 ? 0 : static_cast<std::uint16_t>(3 - l);
+    const std::vector<float> planes_sw = {0, 0, 0, 0, 0, 0, -1, 2.01f, 0, 0, -1, 2.0f};
+    const auto out2 = grow_once(b, depth, swapped, w, h, planes_sw);
+    CHECK(out2[at(w, 4, 0)] == 2);
+    CHECK(out2[at(w, 4, 1)] == 1);
+  }
+}
+
+TEST_CASE_TEMPLATE("grow_kernel: a plane's own cap limits its growth below the noise tolerance", B,
+                   EDGEPLANE_TEST_BACKENDS) {
+  const int w = 9, h = 1;
+  // Label 1 left (plane z = 2.000), label 2 right (plane z = 2.010); the middle pixel at 2.008 is
+  // 2 mm from plane 2 and 8 mm from plane 1, both within the 22.5 mm noise tolerance.
+  std::vector<float> depth = {2.f, 2.f, 2.f, 2.f, 2.008f, 2.01f, 2.01f, 2.01f, 2.01f};
+  const std::vector<std::uint16_t> labels = {1, 1, 1, 1, 0, 2, 2, 2, 2};
+  const std::vector<float> planes = {0, 0, 0, 0, 0, 0, -1, 2.0f, 0, 0, -1, 2.01f};
+  for (const B& b : variants<B>()) {
+    CHECK(grow_once(b, depth, labels, w, h, planes, {0.f, 0.05f, 0.05f})[4] == 2);
+    CHECK(grow_once(b, depth, labels, w, h, planes, {0.f, 0.05f, 0.001f})[4] == 1);  // 2 mm > plane 2's cap
+    CHECK(grow_once(b, depth, labels, w, h, planes, {0.f, 0.005f, 0.001f})[4] == 0);  // beyond both caps
+  }
+}
+
+TEST_CASE_TEMPLATE("label closing (r = 1) fills 1-pixel and 2x2 holes, not a 5x5 one, and does not grow regions", B,
+                   EDGEPLANE_TEST_BACKENDS) {
+  const int w = 30, h = 24;
+  std::vector<std::uint16_t> in(static_cast<std::size_t>(w) * h, 0);
+  for (int y = 2; y < 20; ++y)
+    for (int x = 2; x < 26; ++x) in[at(w, x, y)] = 3;
+  std::vector<std::pair<int, int>> filled = {{5, 5}, {10, 5}, {11, 5}, {10, 6}, {11, 6}};  // 1x1 and 2x2 holes
+  std::vector<std::pair<int, int>> kept;
+  for (int y = 10; y < 15; ++y)
+    for (int x = 15; x < 20; ++x) kept.push_back({x, y});  // 5x5 hole
+  for (auto [x, y] : filled) in[at(w, x, y)] = 0;
+  for (auto [x, y] : kept) in[at(w, x, y)] = 0;
+  for (const B& b : variants<B>()) {
+    CAPTURE(variant_name(b));
+    const auto out = close_labels(b, in, w, h, 1);
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        CAPTURE(x);
+        CAPTURE(y);
+        const bool inside = x >= 2 && x < 26 && y >= 2 && y < 20;
+        const bool big_hole = x >= 15 && x < 20 && y >= 10 && y < 15;
+        CHECK(out[at(w, x, y)] == (inside && !big_hole ? 3 : 0));
+      }
+  }
+}
+
+TEST_CASE_TEMPLATE("label closing: a hole on the border of two labels takes the smaller label", B,
+                   EDGEPLANE_TEST_BACKENDS) {
+  const int w = 10, h = 6;
+  std::vector<std::uint16_t> in(static_cast<std::size_t>(w) * h);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) in[at(w, x, y)] = x < 5 ? 7 : 4;
+  in[at(w, 5, 3)] = 0;
+  in[at(w, 4, 1)] = 0;
+  const B b{};
+  const auto out = close_labels(b, in, w, h, 1);
+  CHECK(out[at(w, 5, 3)] == 4);
+  CHECK(out[at(w, 4, 1)] == 4);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      if (in[at(w, x, y)] != 0) CHECK(out[at(w, x, y)] == in[at(w, x, y)]);  // labelled pixels keep theirs
+}
+
+TEST_CASE_TEMPLATE("upsample_kernel: nearest neighbour 2x, odd last row and column repeat", B,
+                   EDGEPLANE_TEST_BACKENDS) {
+  const int w = 3, h = 2;
+  const std::vector<std::uint16_t> in = {1, 2, 3, 4, 5, 6};
+  for (const B& b : variants<B>()) {
+    for (auto [ow, oh] : {std::pair{6, 4}, std::pair{7, 5}}) {
+      CAPTURE(ow);
+      device_array<std::uint16_t, B> src(b, in), out(b, static_cast<std::size_t>(ow) * oh, 0xBEEF);
+      b.for_each_index(ow * oh, detail::upsample_kernel{src.cview(w, h), out.view(ow, oh)});
+      const auto o = out.host();
+      for (int y = 0; y < oh; ++y)
+        for (int x = 0; x < ow; ++x) {
+          CAPTURE(x);
+          CAPTURE(y);
+          CHECK(o[at(ow, x, y)] == in[at(w, std::min(x / 2, w - 1), std::min(y / 2, h - 1))]);
+        }
+    }
+    // Spot checks written out: the 2x2 block of source pixel (1, 0) and the repeated last column.
+    device_array<std::uint16_t, B> src(b, in), out(b, 35, 0);
+    b.for_each_index(35, detail::upsample_kernel{src.cview(w, h), out.view(7, 5)});
+    const auto o = out.host();
+    CHECK(o[at(7, 2, 0)] == 2);
+    CHECK(o[at(7, 3, 1)] == 2);
+    CHECK(o[at(7, 6, 4)] == 6);
+    CHECK(o[at(7, 0, 4)] == 4);
+  }
+}

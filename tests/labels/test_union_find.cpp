@@ -1,0 +1,317 @@
+// Tests of include/edgeplane/labels/union_find.hpp: the lock-free union-find against a serial
+// reference, the grid adjacency, and determinism (every root is its component's smallest element).
+#include <doctest/doctest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <numeric>
+#include <vector>
+
+#include "edgeplane/labels/union_find.hpp"
+#include "support/test_backends.hpp"
+
+using namespace edgeplane;
+using namespace edgeplane_test;
+
+namespace {
+
+/// A serial reference union-find; component_min()[i] is the smallest element of i's component.
+struct reference_uf {
+  std::vector<int> parent;
+  explicit reference_uf(int n) : parent(static_cast<std::size_t>(n)) { std::iota(parent.begin(), parent.end(), 0); }
+  int find(int x) {
+    while (parent[x] != x) x = parent[x];
+    return x;
+  }
+  void unite(int a, int b) {
+    a = find(a);
+    b = find(b);
+    if (a != b) parent[std::max(a, b)] = std::min(a, b);
+  }
+  std::vector<std::int32_t> component_min() {
+    std::vector<std::int32_t> out(parent.size());
+    for (std::size_t i = 0; i < parent.size(); ++i) out[i] = find(static_cast<int>(i));
+    return out;
+  }
+};
+
+/// Active unless listed as inactive by a byte mask (host or backend memory alike).
+struct mask_active {
+  const std::uint8_t* on;
+  bool operator()(std::int64_t i) const { return on[i] != 0; }
+};
+
+/// Each element's root, found by following the parents to their fixed point.  The union tests
+/// compare these, so that they test the unions alone; whether flatten already stored every root
+/// (the documented output) is the separate "after flatten" test below.
+std::vector<std::int32_t> resolved(std::vector<std::int32_t> parent) {
+  for (std::size_t i = 0; i < parent.size(); ++i) {
+    std::int32_t r = parent[i];
+    while (r >= 0 && parent[static_cast<std::size_t>(r)] != r) r = parent[static_cast<std::size_t>(r)];
+    parent[i] = r;
+  }
+  return parent;
+}
+
+/// Runs connected_components over an explicit pair list; returns the parent array as written.
+template <class B, class Active>
+std::vector<std::int32_t> raw_components(const B& b, int n, Active active, const std::vector<std::int32_t>& first,
+                                         const std::vector<std::int32_t>& second) {
+  device_array<std::int32_t, B> f(b, first), s(b, second), parent(b, static_cast<std::size_t>(n), -7);
+  connected_components(b, n, active, static_cast<std::int64_t>(first.size()),
+                       detail::pair_list_adjacency{f.data(), s.data()}, parent.data());
+  return parent.host();
+}
+
+/// As raw_components, with every element resolved to its root.
+template <class B, class Active>
+std::vector<std::int32_t> components(const B& b, int n, Active active, const std::vector<std::int32_t>& first,
+                                     const std::vector<std::int32_t>& second) {
+  return resolved(raw_components(b, n, active, first, second));
+}
+
+}  // namespace
+
+TEST_CASE_TEMPLATE("union-find: chains in forward, reversed and interleaved order end rooted at 0", B,
+                   EDGEPLANE_TEST_BACKENDS) {
+  const int n = 5000;
+  std::vector<std::int32_t> a, c;
+  for (int i = 0; i + 1 < n; ++i) {
+    a.push_back(i);
+    c.push_back(i + 1);
+  }
+  for (const B& b : variants<B>()) {
+    CAPTURE(variant_name(b));
+    const std::vector<std::int32_t> zeros(n, 0);
+    CHECK(components(b, n, detail::all_active{}, a, c) == zeros);
+    const std::vector<std::int32_t> ra(a.rbegin(), a.rend()), rc(c.rbegin(), c.rend());
+    CHECK(components(b, n, detail::all_active{}, rc, ra) == zeros);  // pairs reversed, (i+1, i)
+    std::vector<std::int32_t> ia, ic;  // odd links first, then even ones
+    for (int par = 1; par >= 0; --par)
+      for (int i = par; i + 1 < n; i += 2) {
+        ia.push_back(i + 1);
+        ic.push_back(i);
+      }
+    CHECK(components(b, n, detail::all_active{}, ia, ic) == zeros);
+  }
+}
+
+TEST_CASE_TEMPLATE("union-find: random pairs match a serial reference; roots are component minima", B,
+                   EDGEPLANE_TEST_BACKENDS) {
+  lcg_noise rng(11);
+  for (int trial = 0; trial < 6; ++trial) {
+    const int n = 500 + 700 * trial, m = trial % 2 ? n / 2 : n;  // sparse and dense unions
+    std::vector<std::uint8_t> on(static_cast<std::size_t>(n));
+    for (auto& v : on) v = rng.next_u32(10) != 0 ? 1 : 0;  // about 10 % inactive
+    std::vector<std::int32_t> a, c;
+    reference_uf ref(n);
+    while (static_cast<int>(a.size()) < m) {
+      const int x = static_cast<int>(rng.next_u32(n)), y = static_cast<int>(rng.next_u32(n));
+      if (!on[x] || !on[y]) continue;  // pairs name active elements only
+      a.push_back(x);
+      c.push_back(y);
+      ref.unite(x, y);
+    }
+    auto want = ref.component_min();
+    for (int i = 0; i < n; ++i)
+      if (!on[i]) want[i] = -1;
+    for (const B& b : variants<B>()) {
+      CAPTURE(variant_name(b));
+      CAPTURE(trial);
+      device_array<std::uint8_t, B> act(b, on);
+      CHECK(components(b, n, mask_active{act.data()}, a, c) == want);
+    }
+  }
+}
+
+TEST_CASE_TEMPLATE("union-find: under contention (all pairs to one element) the result never varies", B,
+                   EDGEPLANE_TEST_BACKENDS) {
+  const int n = 1 << 15;
+  std::vector<std::int32_t> a, c;
+  for (int i = 0; i < n; ++i) {  // every element to the hub in the middle, then to the last element
+    a.push_back(i);
+    c.push_back(n / 2);
+  }
+  for (int i = 0; i < n; i += 3) {
+    a.push_back(n - 1);
+    c.push_back(i);
+  }
+  const std::vector<std::int32_t> zeros(n, 0);
+  for (const B& b : variants<B>()) {
+    CAPTURE(variant_name(b));
+    for (int rep = 0; rep < 50; ++rep) {
+      CAPTURE(rep);
+      REQUIRE(components(b, n, detail::all_active{}, a, c) == zeros);
+    }
+  }
+  // Every element to the last one, in descending order: both threads keep hooking the same current
+  // root, so compare-and-swaps fail often and a lost retry would leave elements apart.
+  for (int m : {1 << 12, 1 << 14}) {
+    std::vector<std::int32_t> sa, sb;
+    for (int i = m - 2; i >= 0; --i) {
+      sa.push_back(m - 1);
+      sb.push_back(i);
+    }
+    const std::vector<std::int32_t> mzeros(static_cast<std::size_t>(m), 0);
+    for (const B& b : variants<B>())
+      for (int rep = 0; rep < 50; ++rep) REQUIRE(components(b, m, detail::all_active{}, sa, sb) == mzeros);
+  }
+  // Two hubs that must stay apart: even elements to 0, odd elements to 1.
+  std::vector<std::int32_t> e1, e2;
+  for (int i = 2; i < n; ++i) {
+    e1.push_back(i);
+    e2.push_back(i % 2);
+  }
+  std::vector<std::int32_t> parity(n);
+  for (int i = 0; i < n; ++i) parity[i] = i % 2;
+  for (const B& b : variants<B>())
+    for (int rep = 0; rep < 50; ++rep) REQUIRE(components(b, n, detail::all_active{}, e1, e2) == parity);
+}
+
+// Regression: flatten once called uf_find, whose path-halving stores could overwrite parent[x] with
+// a non-root ancestor AFTER x's own flatten work item had stored its root.  Long chains (pairs
+// (i, i+1) in descending order) showed it in about 40 % of parallel runs on a 2-core machine.
+TEST_CASE_TEMPLATE("union-find: after flatten every element points at its root (long chains, 50 runs)", B,
+                   EDGEPLANE_TEST_BACKENDS) {
+  for (int n : {1 << 12, 1 << 13, 1 << 14}) {
+    std::vector<std::int32_t> chain_a, chain_b, star_a, star_b;
+    for (int i = n - 2; i >= 0; --i) {
+      chain_a.push_back(i);  // descending links build parent chains n-1 -> n-2 -> ... before flatten
+      chain_b.push_back(i + 1);
+      star_a.push_back(n - 1);
+      star_b.push_back(i);
+    }
+    const std::vector<std::int32_t> zeros(static_cast<std::size_t>(n), 0);
+    for (const B& b : variants<B>()) {
+      CAPTURE(variant_name(b));
+      CAPTURE(n);
+      int bad_chain = 0, bad_star = 0;
+      for (int rep = 0; rep < 50; ++rep) {
+        bad_chain += raw_components(b, n, detail::all_active{}, chain_a, chain_b) != zeros ? 1 : 0;
+        bad_star += raw_components(b, n, detail::all_active{}, star_a, star_b) != zeros ? 1 : 0;
+      }
+      CHECK(bad_chain == 0);
+      CHECK(bad_star == 0);
+    }
+  }
+}
+
+TEST_CASE_TEMPLATE("union-find: parallel and serial runs give identical parents", B, EDGEPLANE_TEST_BACKENDS) {
+  lcg_noise rng(5);
+  const int n = 20000;
+  std::vector<std::int32_t> a, c;
+  for (int i = 0; i < 3 * n / 4; ++i) {
+    a.push_back(static_cast<std::int32_t>(rng.next_u32(n)));
+    c.push_back(static_cast<std::int32_t>(rng.next_u32(n)));
+  }
+  const auto vs = variants<B>();
+  const auto first = components(vs.front(), n, detail::all_active{}, a, c);
+  for (const B& b : vs) {
+    CAPTURE(variant_name(b));
+    for (int rep = 0; rep < 5; ++rep) CHECK(components(b, n, detail::all_active{}, a, c) == first);
+  }
+}
+
+TEST_CASE_TEMPLATE("grid4_adjacency: a wall of inactive pixels splits a grid in two", B, EDGEPLANE_TEST_BACKENDS) {
+  const int w = 20, h = 10, wall = 7;
+  std::vector<float> depth(static_cast<std::size_t>(w) * h, 1.5f);
+  std::vector<std::uint8_t> cov(depth.size(), 1);
+  for (int y = 0; y < h; ++y) cov[static_cast<std::size_t>(y) * w + wall] = 0;
+  for (const B& b : variants<B>()) {
+    CAPTURE(variant_name(b));
+    device_array<float, B> z(b, depth);
+    device_array<std::uint8_t, B> c(b, cov);
+    device_array<std::int32_t, B> parent(b, depth.size(), -7);
+    const detail::covered_active active{c.data(), nullptr};
+    connected_components(b, w * h, active, w * h, detail::grid4_adjacency<detail::covered_active>{z.cview(w, h), active, 0.06f, 0.f, 0.f},
+                         parent.data());
+    const auto p = resolved(parent.host());
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        CAPTURE(x);
+        CAPTURE(y);
+        CHECK(p[static_cast<std::size_t>(y) * w + x] == (x < wall ? 0 : x == wall ? -1 : wall + 1));
+      }
+  }
+}
+
+TEST_CASE_TEMPLATE("grid4_adjacency: a depth step splits; a surface sloping within the slope term does not", B,
+                   EDGEPLANE_TEST_BACKENDS) {
+  const int w = 16, h = 12;
+  // Left: 1.5 m; right: 1.8 m (a 30 cm step at x = 8).  Bottom rows: a ramp of 4 cm per pixel.
+  std::vector<float> depth(static_cast<std::size_t>(w) * h);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      depth[static_cast<std::size_t>(y) * w + x] = y < 6 ? (x < 8 ? 1.5f : 1.8f) : 3.0f + 0.04f * x;
+  std::vector<std::uint8_t> cov_a(depth.size(), 1), cov_b(depth.size(), 0);
+  for (int x = 0; x < w; ++x) cov_a[static_cast<std::size_t>(5) * w + x] = 0;  // rows 0-5 apart from 6-11
+  for (int x = 0; x < w; ++x) {  // row 4 is active through the second mask only
+    cov_a[static_cast<std::size_t>(4) * w + x] = 0;
+    cov_b[static_cast<std::size_t>(4) * w + x] = 1;
+  }
+  for (const B& b : variants<B>()) {
+    CAPTURE(variant_name(b));
+    device_array<float, B> z(b, depth);
+    device_array<std::uint8_t, B> ca(b, cov_a), cb(b, cov_b);
+    const detail::covered_active active{ca.data(), cb.data()};
+    for (float slope_inv_f : {0.f, 10.f / 365.f}) {
+      CAPTURE(slope_inv_f);
+      device_array<std::int32_t, B> parent(b, depth.size(), -7);
+      connected_components(b, w * h, active, w * h,
+                           detail::grid4_adjacency<detail::covered_active>{z.cview(w, h), active, 0.03f, 0.f, slope_inv_f}, parent.data());
+      const auto p = resolved(parent.host());
+      for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+          CAPTURE(x);
+          CAPTURE(y);
+          const std::int32_t got = p[static_cast<std::size_t>(y) * w + x];
+          if (y == 5)
+            CHECK(got == -1);
+          else if (y < 5)
+            CHECK(got == (x < 8 ? 0 : 8));  // the step is a boundary however the slope term is set
+          else if (slope_inv_f > 0)
+            CHECK(got == 6 * w);  // 4 cm steps at 3 m are within 3 cm + 10 footprints (8 cm)
+          else
+            CHECK(got == 6 * w + x);  // 4 cm > 3 cm: each ramp column apart (columns are level)
+        }
+    }
+  }
+}
+
+TEST_CASE_TEMPLATE("eroded_failed_active: a narrow bridge between two parts of a failed candidate breaks", B,
+                   EDGEPLANE_TEST_BACKENDS) {
+  // Candidate 1 (failed): blocks x 1..10 and x 18..28 (y 1..10) joined by a 1-pixel bridge at y = 5.
+  // Candidate 2 (not failed): a block at the bottom.  Eroded by r = 1, only the blocks' interiors stay.
+  const int w = 30, h = 16;
+  std::vector<std::int32_t> cand(static_cast<std::size_t>(w) * h, 0);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const bool blocks = y >= 1 && y <= 10 && ((x >= 1 && x <= 10) || (x >= 18 && x <= 28));
+      const bool bridge = y == 5 && x > 10 && x < 18;
+      cand[static_cast<std::size_t>(y) * w + x] = blocks || bridge ? 1 : (y >= 12 ? 2 : 0);
+    }
+  const std::vector<std::uint8_t> failed = {0, 1, 0};
+  const std::vector<float> depth(cand.size(), 2.f);
+  for (const B& b : variants<B>()) {
+    CAPTURE(variant_name(b));
+    device_array<std::int32_t, B> c(b, cand), parent(b, cand.size(), -7);
+    device_array<std::uint8_t, B> f(b, failed);
+    device_array<float, B> z(b, depth);
+    const detail::eroded_failed_active active{c.cview(w, h), f.data(), 1};
+    connected_components(b, w * h, active, w * h,
+                         detail::grid4_adjacency<detail::eroded_failed_active>{z.cview(w, h), active, 0.06f, 0.f, 0.f},
+                         parent.data());
+    const auto p = resolved(parent.host());
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        CAPTURE(x);
+        CAPTURE(y);
+        const bool in_y = y >= 2 && y <= 9;
+        std::int32_t want = -1;
+        if (in_y && x >= 2 && x <= 9) want = 2 * w + 2;     // left interior, rooted at (2, 2)
+        if (in_y && x >= 19 && x <= 27) want = 2 * w + 19;  // right interior, rooted at (19, 2)
+        CHECK(p[static_cast<std::size_t>(y) * w + x] == want);
+      }
+  }
+}

@@ -1,0 +1,202 @@
+// Tests of include/edgeplane/planes/plane_stats.hpp: moments of synthetic planes, the plane fit,
+// bounding boxes, and the determinism of the fixed-point sums.
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include "edgeplane/planes/plane_stats.hpp"
+#include "support/test_backends.hpp"
+
+using namespace edgeplane;
+using namespace edgeplane_test;
+
+namespace {
+
+struct moments_result {
+  std::vector<std::uint64_t> m;
+  std::vector<std::int32_t> bbox;
+  plane_fit fit(int label) const { return fit_plane(m.data() + label * moment_slots, bbox.data() + 4 * label); }
+};
+
+template <class B>
+moments_result moments(const B& b, const std::vector<float>& depth, const std::vector<std::uint16_t>& labels, int w,
+                       int h, int num_labels) {
+  device_array<float, B> z(b, depth);
+  device_array<std::uint16_t, B> l(b, labels);
+  device_array<std::uint64_t, B> m(b, static_cast<std::size_t>(num_labels + 1) * moment_slots, 12345);
+  device_array<std::int32_t, B> bb(b, static_cast<std::size_t>(num_labels + 1) * 4, 12345);  // cleared by the call
+  accumulate_moments(b, z.cview(w, h), camera(w, h), detail::image_labels{l.cview(w, h)}, num_labels, m.data(),
+                     bb.data());
+  return {m.host(), bb.host()};
+}
+
+double angle_deg(const Eigen::Vector3d& a, vec3 b) {
+  const double c = a.dot(Eigen::Vector3d(b.x, b.y, b.z)) / a.norm();
+  return std::acos(std::min(1.0, std::max(-1.0, c))) * 180.0 / 3.14159265358979;
+}
+
+}  // namespace
+
+TEST_CASE_TEMPLATE("fit_plane: the moments of a ray-cast plane give its normal (0.1 deg) and d (1 mm)", B,
+                   EDGEPLANE_TEST_BACKENDS) {
+  const int w = 64, h = 48;
+  struct plane_case {
+    vec3 n;
+    double d;
+  };
+  // Normals given toward the camera (d > 0) and away from it (d < 0): the fit always turns them
+  // toward the camera.
+  const plane_case cases[] = {{normalized({0.0, 0.0, -1.0}), 2.0},
+                              {normalized({0.3, -0.2, -1.0}), 1.5},
+                              {normalized({-0.5, 0.6, -1.0}), 3.0},
+                              {normalized({0.2, 0.9, 0.4}), -1.2}};  // a floor-like plane, normal given away
+  for (const B& b : variants<B>()) {
+    CAPTURE(variant_name(b));
+    for (const auto& c : cases) {
+      CAPTURE(c.d);
+      const auto depth = plane_image(camera(w, h), w, h, c.n, c.d);
+      int valid = 0;
+      for (float z : depth) valid += z > 0.f ? 1 : 0;
+      REQUIRE(valid > w * h / 2);
+      const std::vector<std::uint16_t> labels(depth.size(), 1);
+      const plane_fit f = moments(b, depth, labels, w, h, 1).fit(1);
+      const vec3 toward = c.d >= 0 ? c.n : vec3{-c.n.x, -c.n.y, -c.n.z};
+      CHECK(angle_deg(f.normal, toward) < 0.1);
+      CHECK(std::abs(f.d - std::abs(c.d)) < 0.001);
+      CHECK(f.d >= 0);
+      CHECK(f.normal.dot(f.centroid) < 0);  // pointing toward the camera
+      CHECK(std::abs(f.normal.norm() - 1.0) < 1e-9);
+      CHECK(f.points == valid);
+      CHECK(f.pixels == w * h);
+      CHECK(f.eigenvalues(0) >= f.eigenvalues(1));
+      CHECK(f.eigenvalues(1) >= f.eigenvalues(2));
+      CHECK(std::sqrt(f.eigenvalues(2)) < 0.0005);  // flat: residual below the 0.1 mm quantum scale
+    }
+  }
+}
+
+TEST_CASE_TEMPLATE("accumulate_moments: two labels, invalid pixels, unlabelled pixels and bounding boxes", B,
+                   EDGEPLANE_TEST_BACKENDS) {
+  const int w = 40, h = 30;
+  const auto k = camera(w, h);
+  const vec3 n1 = normalized({0.2, 0.1, -1.0}), n2 = normalized({-0.6, 0.0, -1.0});
+  std::vector<float> depth(static_cast<std::size_t>(w) * h);
+  std::vector<std::uint16_t> labels(depth.size(), 0);
+  int pts1 = 0, px1 = 0, pts2 = 0;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const std::size_t i = static_cast<std::size_t>(y) * w + x;
+      // Label 1: an L shape (x 3..14, y 4..25, minus x > 8 for y > 12); label 2: a diamond around (28, 15).
+      const bool l1 = x >= 3 && x <= 14 && y >= 4 && y <= 25 && !(x > 8 && y > 12);
+      const bool l2 = std::abs(x - 28) + std::abs(y - 15) <= 7;
+      depth[i] = plane_depth(k, x, y, l2 ? n2 : n1, l2 ? 2.5 : 1.8);
+      if ((x + 2 * y) % 11 == 0) depth[i] = 0.f;  // scattered invalid pixels
+      labels[i] = l1 ? 1 : l2 ? 2 : 0;
+      if (l1) {
+        ++px1;
+        pts1 += depth[i] > 0.f ? 1 : 0;
+      }
+      if (l2) pts2 += depth[i] > 0.f ? 1 : 0;
+    }
+  for (const B& b : variants<B>()) {
+    CAPTURE(variant_name(b));
+    const auto r = moments(b, depth, labels, w, h, 2);
+    for (int s = 0; s < moment_slots; ++s) CHECK(r.m[s] == 0);  // label 0 is not accumulated
+    const plane_fit f1 = r.fit(1), f2 = r.fit(2);
+    CHECK(f1.points == pts1);
+    CHECK(f1.pixels == px1);
+    CHECK(f1.points < f1.pixels);
+    CHECK(f2.points == pts2);
+    CHECK(f1.bbox == std::array<int, 4>{3, 4, 14, 25});
+    CHECK(f2.bbox == std::array<int, 4>{21, 8, 35, 22});
+    CHECK(angle_deg(f1.normal, n1) < 0.1);
+    CHECK(angle_deg(f2.normal, n2) < 0.1);
+    CHECK(std::abs(f1.d - 1.8) < 0.001);
+    CHECK(std::abs(f2.d - 2.5) < 0.001);
+  }
+}
+
+TEST_CASE_TEMPLATE("accumulate_moments: fixed-point sums are identical between serial and parallel runs", B,
+                   EDGEPLANE_TEST_BACKENDS) {
+  const int w = 160, h = 120, num = 7;  // more than 64 rows: the parallel path really runs in parallel
+  auto depth = plane_image(camera(w, h), w, h, normalized({0.1, -0.3, -1.0}), 2.2);
+  lcg_noise noise(9);
+  for (auto& z : depth) z += noise(0.004f);
+  std::vector<std::uint16_t> labels(depth.size());
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      labels[static_cast<std::size_t>(y) * w + x] = static_cast<std::uint16_t>((x / 7 + y / 5 + x * y % 3) % (num + 1));
+  const auto vs = variants<B>();
+  const auto ref = moments(vs.back(), depth, labels, w, h, num);
+  for (const B& b : vs)
+    for (int rep = 0; rep < 5; ++rep) {
+      CAPTURE(variant_name(b));
+      const auto r = moments(b, depth, labels, w, h, num);
+      CHECK(r.m == ref.m);
+      CHECK(r.bbox == ref.bbox);
+    }
+  // And the sums are those of a plain serial loop over the fixed-point coordinates.
+  const auto proj = detail::make_projector(camera(w, h));
+  std::int64_t sx = 0, szz = 0, cnt = 0;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      if (labels[static_cast<std::size_t>(y) * w + x] == 3) {
+        const auto p = proj(x, y, depth[static_cast<std::size_t>(y) * w + x]);
+        const auto px = static_cast<std::int64_t>(std::llrint(double(p.x) * fixed_per_metre));
+        const auto pz = static_cast<std::int64_t>(std::llrint(double(p.z) * fixed_per_metre));
+        sx += px;
+        szz += pz * pz;
+        ++cnt;
+      }
+  CHECK(static_cast<std::int64_t>(ref.m[3 * moment_slots + 0]) == cnt);
+  CHECK(static_cast<std::int64_t>(ref.m[3 * moment_slots + 1]) == sx);
+  CHECK(static_cast<std::int64_t>(ref.m[3 * moment_slots + 9]) == szz);
+}
+
+TEST_CASE_TEMPLATE("inlier_labels: the refit ignores a candidate's off-plane rim; candidate_image_labels agrees", B,
+                   EDGEPLANE_TEST_BACKENDS) {
+  const int w = 48, h = 36;
+  const auto k = camera(w, h);
+  const vec3 n = normalized({0.25, -0.15, -1.0});
+  auto depth = plane_image(k, w, h, n, 2.0);
+  std::vector<std::int32_t> cand(depth.size(), 0);
+  int inliers = 0;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const std::size_t i = static_cast<std::size_t>(y) * w + x;
+      if (x >= 40) continue;                  // not in any candidate
+      cand[i] = y < 18 ? 1 : 2;               // two candidates, merged into plane 1 by the table
+      if (x >= 36) depth[i] += 0.04f;         // a rim 4 cm off the plane (a crease's other face)
+      else ++inliers;
+    }
+  const std::vector<std::uint16_t> table = {0, 1, 1};
+  const std::vector<float> planes = {0, 0, 0, 0, float(n.x), float(n.y), float(n.z), 2.0f};
+  const std::vector<float> tol = {0.f, 0.01f};
+  for (const B& b : variants<B>()) {
+    CAPTURE(variant_name(b));
+    device_array<float, B> z(b, depth), pl(b, planes), tl(b, tol);
+    device_array<std::int32_t, B> c(b, cand);
+    device_array<std::uint16_t, B> tb(b, table);
+    device_array<std::uint64_t, B> m(b, 2 * moment_slots, 0);
+    device_array<std::int32_t, B> bb(b, 8, 0);
+    accumulate_moments(b, z.cview(w, h), k,
+                       detail::inlier_labels{c.cview(w, h), tb.data(), pl.data(), tl.data(), z.cview(w, h),
+                                             detail::make_projector(k)},
+                       1, m.data(), bb.data());
+    const auto mh = m.host();
+    const plane_fit f = fit_plane(mh.data() + moment_slots, bb.host().data() + 4);
+    CHECK(f.points == inliers);
+    CHECK(f.bbox == std::array<int, 4>{0, 0, 35, h - 1});
+    CHECK(angle_deg(f.normal, n) < 0.1);
+    CHECK(std::abs(f.d - 2.0) < 0.001);
+    // Candidate ids straight from the image: two labels, rim included.
+    device_array<std::uint64_t, B> m2(b, 3 * moment_slots, 0);
+    device_array<std::int32_t, B> bb2(b, 12, 0);
+    accumulate_moments(b, z.cview(w, h), k, detail::candidate_image_labels{c.cview(w, h)}, 2, m2.data(), bb2.data());
+    const auto m2h = m2.host();
+    CHECK(fit_plane(m2h.data() + moment_slots).points == 40 * 18);
+    CHECK(fit_plane(m2h.data() + 2 * moment_slots).points == 40 * 18);
+  }
+}

@@ -1,0 +1,200 @@
+// Tests of include/edgeplane/segments/line_segments.hpp: the diagonal walk, run length, the line
+// test with its splitting, and mask pixels ending runs.
+#include <doctest/doctest.h>
+
+#include <cstdint>
+#include <utility>
+#include <vector>
+
+#include "edgeplane/segments/line_segments.hpp"
+#include "support/test_backends.hpp"
+
+using namespace edgeplane;
+using namespace edgeplane_test;
+
+namespace {
+
+template <class D>
+std::vector<std::pair<int, int>> diagonal_pixels(int w, int h, std::int64_t k) {
+  int x = 0, y = 0;
+  detail::diagonal_start<D>(w, h, k, x, y);
+  std::vector<std::pair<int, int>> px;
+  for (; x >= 0 && y >= 0 && x < w && y < h; x += D::dx, y += D::dy) px.push_back({x, y});
+  return px;
+}
+
+template <class D, class B>
+std::vector<std::uint8_t> extract(const B& b, const std::vector<float>& depth, const std::vector<std::uint8_t>& mask,
+                                  int w, int h, const params& p) {
+  device_array<float, B> z(b, depth);
+  device_array<std::uint8_t, B> m(b, mask), cov(b, depth.size(), 0xEE);  // stale contents must be cleared
+  extract_segments<D>(b, z.cview(w, h), m.cview(w, h), camera(w, h), p, cov.view(w, h));
+  return cov.host();
+}
+
+std::size_t at(int w, int x, int y) { return static_cast<std::size_t>(y) * w + x; }
+
+}  // namespace
+
+TEST_CASE_TEMPLATE("diagonal_start: the diagonals cover every pixel exactly once", D, direction::left_diagonal,
+                   direction::right_diagonal) {
+  const std::pair<int, int> sizes[] = {{1, 1}, {1, 7}, {7, 1}, {5, 3}, {3, 5}, {8, 8}, {13, 4}};
+  for (auto [w, h] : sizes) {
+    CAPTURE(w);
+    CAPTURE(h);
+    REQUIRE(detail::diagonal_count(w, h) == w + h - 1);
+    std::vector<int> seen(static_cast<std::size_t>(w) * h, 0);
+    for (std::int64_t k = 0; k < detail::diagonal_count(w, h); ++k) {
+      const auto px = diagonal_pixels<D>(w, h, k);
+      REQUIRE(!px.empty());
+      // The start is the diagonal's first pixel: stepping back leaves the image.
+      const int bx = px[0].first - D::dx, by = px[0].second - D::dy;
+      CHECK((bx < 0 || by < 0 || bx >= w || by >= h));
+      for (auto [x, y] : px) ++seen[at(w, x, y)];
+    }
+    for (int c : seen) CHECK(c == 1);
+  }
+  CHECK(detail::diagonal_count(0, 5) == 0);
+  CHECK(detail::diagonal_count(5, 0) == 0);
+}
+
+TEST_CASE_TEMPLATE("extract_segments: on a plane without edges, exactly the diagonals longer than t_length are kept", B,
+                   EDGEPLANE_TEST_BACKENDS) {
+  const int w = 40, h = 24;
+  const auto depth = plane_image(camera(w, h), w, h, normalized({0.3, 0.2, -1.0}), 1.5);
+  const std::vector<std::uint8_t> mask(depth.size(), 0);
+  const params p = presets::thesis_full();  // t_length = 15
+  for (const B& b : variants<B>()) {
+    CAPTURE(variant_name(b));
+    auto check_dir = [&](auto dir) {
+      using D = decltype(dir);
+      const auto cov = extract<D>(b, depth, mask, w, h, p);
+      int kept = 0;
+      for (std::int64_t k = 0; k < detail::diagonal_count(w, h); ++k) {
+        const auto px = diagonal_pixels<D>(w, h, k);
+        const std::uint8_t want = static_cast<int>(px.size()) > p.t_length ? 1 : 0;
+        for (auto [x, y] : px) {
+          CAPTURE(k);
+          REQUIRE(cov[at(w, x, y)] == want);
+          kept += want;
+        }
+      }
+      CHECK(kept > w * h / 2);
+    };
+    check_dir(direction::left_diagonal{});
+    check_dir(direction::right_diagonal{});
+  }
+}
+
+TEST_CASE_TEMPLATE("extract_segments: a run of t_length pixels is dropped, one of t_length + 1 is kept", B,
+                   EDGEPLANE_TEST_BACKENDS) {
+  const int w = 48, h = 48;
+  const auto depth = plane_image(camera(w, h), w, h, normalized({-0.2, 0.3, -1.0}), 2.0);
+  params p = presets::thesis_full();
+  for (int t_length : {15, 5}) {
+    p.t_length = t_length;
+    for (int len : {t_length, t_length + 1}) {
+      CAPTURE(t_length);
+      CAPTURE(len);
+      std::vector<std::uint8_t> mask(depth.size(), 1);  // everything masked but one run on the main diagonal
+      for (int i = 0; i < len; ++i) mask[at(w, 4 + i, 4 + i)] = 0;
+      for (const B& b : variants<B>()) {
+        const auto cov = extract<direction::left_diagonal>(b, depth, mask, w, h, p);
+        int covered = 0;
+        for (std::size_t i = 0; i < cov.size(); ++i) {
+          REQUIRE(cov[i] <= 1);
+          covered += cov[i];
+          if (cov[i]) REQUIRE(mask[i] == 0);
+        }
+        CHECK(covered == (len > t_length ? len : 0));
+      }
+    }
+  }
+}
+
+TEST_CASE_TEMPLATE("extract_segments: runs stop at mask pixels", B, EDGEPLANE_TEST_BACKENDS) {
+  const int w = 40, h = 40;
+  const auto depth = plane_image(camera(w, h), w, h, normalized({0.1, 0.1, -1.0}), 1.2);
+  std::vector<std::uint8_t> mask(depth.size(), 0);
+  mask[at(w, 10, 10)] = 1;            // main diagonal: runs 0..9 (10 px, dropped) and 11..39 (29, kept)
+  mask[at(w, 30 - 20, 20)] = 1;       // anti-diagonal x + y = 30: splits it into 10 + 20 pixels
+  const params p = presets::thesis_full();
+  for (const B& b : variants<B>()) {
+    CAPTURE(variant_name(b));
+    const auto l = extract<direction::left_diagonal>(b, depth, mask, w, h, p);
+    for (int i = 0; i < w; ++i) {
+      CAPTURE(i);
+      CHECK(l[at(w, i, i)] == (i > 10 ? 1 : 0));
+    }
+    const auto r = extract<direction::right_diagonal>(b, depth, mask, w, h, p);
+    for (int y = 0; y <= 30; ++y) {  // pixels (30 - y, y): y = 0..19 (20 px, kept), 20 masked, 21..30 (10, dropped)
+      CAPTURE(y);
+      CHECK(r[at(w, 30 - y, y)] == (y < 20 ? 1 : 0));
+    }
+  }
+}
+
+TEST_CASE_TEMPLATE("extract_segments: a run across an unmarked crease fails the line test; splitting keeps its halves",
+                   B, EDGEPLANE_TEST_BACKENDS) {
+  // A V (valley, faces at +-45 degrees) along the main diagonal with its vertex at (20, 20); the
+  // mask marks everything but that diagonal, and NOT the crease.
+  const int w = 40, h = 40, c = 20;
+  const auto k = camera(w, h);
+  std::vector<float> depth(static_cast<std::size_t>(w) * h);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      // The crease line is x + y = 2c; each face is a plane through it.
+      const vec3 n = normalized(x + y < 2 * c ? vec3{1, 1, -1.4142} : vec3{-1, -1, -1.4142});
+      const double rx = (c - k.cx) / k.fx, ry = (c - k.cy) / k.fy, zc = 1.0;
+      const double d = -(n.x * rx * zc + n.y * ry * zc + n.z * zc);  // the plane passes through the vertex
+      depth[at(w, x, y)] = plane_depth(k, x, y, n, d);
+    }
+  std::vector<std::uint8_t> mask(depth.size(), 1);
+  for (int i = 0; i < w; ++i) mask[at(w, i, i)] = 0;
+  for (const B& b : variants<B>()) {
+    CAPTURE(variant_name(b));
+    params p = presets::thesis_full();
+    p.max_run_splits = 0;
+    auto cov = extract<direction::left_diagonal>(b, depth, mask, w, h, p);
+    int covered = 0;
+    for (auto v : cov) covered += v;
+    CHECK(covered == 0);
+    for (int splits : {1, 4}) {
+      CAPTURE(splits);
+      p.max_run_splits = splits;
+      cov = extract<direction::left_diagonal>(b, depth, mask, w, h, p);
+      for (int i = 0; i < w; ++i) {
+        CAPTURE(i);
+        CHECK(cov[at(w, i, i)] == (i == c ? 0 : 1));  // both straight halves kept, only the vertex dropped
+      }
+    }
+    // The same diagonal on a plane (no crease) is kept whole even without splitting.
+    const auto flat = plane_image(k, w, h, normalized({0.3, 0.3, -1.0}), 1.0);
+    p.max_run_splits = 0;
+    cov = extract<direction::left_diagonal>(b, flat, mask, w, h, p);
+    for (int i = 0; i < w; ++i) CHECK(cov[at(w, i, i)] == 1);
+  }
+}
+
+TEST_CASE_TEMPLATE("extract_segments: a crease near one end leaves one half too short to keep", B,
+                   EDGEPLANE_TEST_BACKENDS) {
+  // Vertex at (10, 10): halves of 10 and 29 pixels; with t_length = 15 only the long one is kept.
+  const int w = 40, h = 40, c = 10;
+  const auto k = camera(w, h);
+  std::vector<float> depth(static_cast<std::size_t>(w) * h);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const vec3 n = normalized(x + y < 2 * c ? vec3{1, 1, -1.4142} : vec3{-1, -1, -1.4142});
+      const double rx = (c - k.cx) / k.fx, ry = (c - k.cy) / k.fy;
+      depth[at(w, x, y)] = plane_depth(k, x, y, n, -(n.x * rx + n.y * ry + n.z));
+    }
+  std::vector<std::uint8_t> mask(depth.size(), 1);
+  for (int i = 0; i < w; ++i) mask[at(w, i, i)] = 0;
+  params p = presets::thesis_full();
+  const B b{};
+  const auto cov = extract<direction::left_diagonal>(b, depth, mask, w, h, p);
+  for (int i = 0; i < w; ++i) {
+    CAPTURE(i);
+    CHECK(cov[at(w, i, i)] == (i > c ? 1 : 0));
+  }
+}
