@@ -5,27 +5,13 @@
 #include <vector>
 
 #include "edgeplane/edgeplane.hpp"
-#include "support/scenes.hpp"
+#include "bench_frames.hpp"
 
 namespace {
 using namespace edgeplane;
 
-struct frame {
-  test::rendered r;
-  std::vector<std::uint16_t> mm;
-};
-
-const frame& scene_at(int w, int h) {
-  static std::vector<std::pair<int, frame>> cache;
-  for (auto& [key, f] : cache)
-    if (key == w * 100000 + h) return f;
-  frame f;
-  f.r = test::render(test::room_with_box(), test::room_camera(), w, h, test::kinect2_intrinsics(w, h),
-                     {0.0015, 0.0005, 0.02, 42});
-  f.mm = f.r.depth_mm();
-  cache.emplace_back(w * 100000 + h, std::move(f));
-  return cache.back().second;
-}
+using edgeplane::bench::frame;
+using edgeplane::bench::scene_at;
 
 void pipeline(benchmark::State& st, const char* preset_name) {
   const int w = static_cast<int>(st.range(0)), h = static_cast<int>(st.range(1));

@@ -13,27 +13,13 @@
 #include <vector>
 
 #include "edgeplane/edgeplane.cuh"
-#include "support/scenes.hpp"
+#include "bench_frames.hpp"
 
 namespace {
 namespace ep = edgeplane;
 
-struct frame {
-  ep::test::rendered r;
-  std::vector<std::uint16_t> mm;
-};
-
-const frame& scene_at(int w, int h) {
-  static std::vector<std::pair<int, frame>> cache;
-  for (auto& [key, f] : cache)
-    if (key == w * 100000 + h) return f;
-  frame f;
-  f.r = ep::test::render(ep::test::room_with_box(), ep::test::room_camera(), w, h, ep::test::kinect2_intrinsics(w, h),
-                         {0.0015, 0.0005, 0.02, 42});
-  f.mm = f.r.depth_mm();
-  cache.emplace_back(w * 100000 + h, std::move(f));
-  return cache.back().second;
-}
+using edgeplane::bench::frame;
+using edgeplane::bench::scene_at;
 
 /// A stream and two events owned by one benchmark run.
 struct cuda_timing {

@@ -25,12 +25,7 @@ struct edge_kernel {
     const int x = static_cast<int>(i % depth.width), y = static_cast<int>(i / depth.width);
     if (!(depth(x, y) > 0.f)) return;
     neighbourhood nb;
-    nb.proj = proj;
-    nb.x = x;
-    nb.y = y;
-    nb.dx = Direction::dx;
-    nb.dy = Direction::dy;
-    gather(nb, depth, edge.reach());
+    gather_along<Direction>(nb, depth, proj, x, y, edge.reach());
     if (edge(nb)) edges(x, y) = static_cast<std::uint8_t>(edges(x, y) | EdgeType::bit);
   }
 };
@@ -69,12 +64,7 @@ template <class Direction>
 EDGEPLANE_HD inline std::uint8_t edges_along(const edge_set& set, image_view<const float> depth, projector proj,
                                              int x, int y) {
   neighbourhood nb;
-  nb.proj = proj;
-  nb.x = x;
-  nb.y = y;
-  nb.dx = Direction::dx;
-  nb.dy = Direction::dy;
-  gather(nb, depth, set.reach());
+  gather_along<Direction>(nb, depth, proj, x, y, set.reach());
   std::uint8_t bits = 0;
   if (set.use_jump && set.jump(nb)) bits |= edge_type::jump::bit;
   if (set.use_extrema && set.extrema(nb)) bits |= edge_type::extrema::bit;

@@ -48,6 +48,18 @@ EDGEPLANE_HD inline void gather(neighbourhood& nb, image_view<const float> depth
   }
 }
 
+/// Sets nb up for pixel (x, y) along Direction and gathers `reach` neighbours per side.
+template <class Direction>
+EDGEPLANE_HD inline void gather_along(neighbourhood& nb, image_view<const float> depth, projector proj, int x, int y,
+                                      int reach) {
+  nb.proj = proj;
+  nb.x = x;
+  nb.y = y;
+  nb.dx = Direction::dx;
+  nb.dy = Direction::dy;
+  gather(nb, depth, reach);
+}
+
 /// Largest distance of the arm's inner points 1..m-1 on side s from the chord c -> P_m, and the
 /// chord's length.
 EDGEPLANE_HD inline void arm_deviation(const neighbourhood& nb, int s, int m, float& max_dev, float& chord) {
