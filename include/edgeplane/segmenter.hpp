@@ -415,15 +415,28 @@ class segmenter {
     // backend synchronizes rarely).
     flag_.resize(1);
     b_.memset(flag_.data(), 0, sizeof(std::int32_t));
-    for (int it = 0; it < p_.grow_iterations && num_planes > 0; ++it) {
-      b_.for_each_index(n, detail::grow_kernel{z, la, lb, proj, sigma, p_.grow_k, planes_.data(), tol_.data(),
-                                               flag_.data()});
-      std::swap(la, lb);
-      if (it % 4 == 3) {
+    if (p_.grow_sweeps) {
+      for (int it = 0; it < p_.grow_iterations && num_planes > 0; ++it) {
+        b_.for_each_index(ph_, detail::grow_sweep_kernel<0>{z, la, proj, sigma, p_.grow_k, planes_.data(),
+                                                            tol_.data(), flag_.data()});
+        b_.for_each_index(pw_, detail::grow_sweep_kernel<1>{z, la, proj, sigma, p_.grow_k, planes_.data(),
+                                                            tol_.data(), flag_.data()});
         std::int32_t changed = 0;
         b_.copy_to_host(&changed, flag_.data(), sizeof(std::int32_t));
         if (!changed) break;
         b_.memset(flag_.data(), 0, sizeof(std::int32_t));
+      }
+    } else {
+      for (int it = 0; it < p_.grow_iterations && num_planes > 0; ++it) {
+        b_.for_each_index(n, detail::grow_kernel{z, la, lb, proj, sigma, p_.grow_k, planes_.data(), tol_.data(),
+                                                 flag_.data()});
+        std::swap(la, lb);
+        if (it % 4 == 3) {
+          std::int32_t changed = 0;
+          b_.copy_to_host(&changed, flag_.data(), sizeof(std::int32_t));
+          if (!changed) break;
+          b_.memset(flag_.data(), 0, sizeof(std::int32_t));
+        }
       }
     }
     if (p_.label_closing_radius > 0 && num_planes > 0) {

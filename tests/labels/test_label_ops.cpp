@@ -215,3 +215,43 @@ TEST_CASE_TEMPLATE("upsample_kernel: nearest neighbour 2x, odd last row and colu
     CHECK(o[at(7, 0, 4)] == 4);
   }
 }
+
+TEST_CASE_TEMPLATE("grow_sweep_kernel: a round carries a label along whole rows and columns, never through an "
+                   "off-plane wall",
+                   B, EDGEPLANE_TEST_BACKENDS) {
+  const int w = 40, h = 10;
+  std::vector<float> depth(static_cast<std::size_t>(w) * h, 2.0f);  // the plane z = 2
+  for (int y = 0; y < h - 1; ++y) depth[at(w, 20, y)] = 2.05f;        // a wall 5 cm off it, open in the last row
+  std::vector<std::uint16_t> labels(depth.size(), 0);
+  labels[at(w, 0, 0)] = 1;
+  const std::vector<float> planes = {0, 0, 0, 0, 0, 0, -1, 2};
+  const std::vector<float> caps = {0.f, 1e9f};
+  const params p = presets::thesis_full();  // tolerance 3 sigma(2 m) = 22.5 mm
+  for (const B& b : variants<B>()) {
+    CAPTURE(variant_name(b));
+    device_array<float, B> z(b, depth), pl(b, planes), cp(b, caps);
+    device_array<std::uint16_t, B> lab(b, labels);
+    device_array<std::int32_t, B> flag(b, 1, 0);
+    std::vector<std::int32_t> changed;
+    std::vector<std::vector<std::uint16_t>> after;
+    for (int round = 0; round < 3; ++round) {
+      b.for_each_index(h, detail::grow_sweep_kernel<0>{z.cview(w, h), lab.view(w, h), detail::make_projector(camera(w, h)),
+                                                       detail::make_noise(p.noise), p.grow_k, pl.data(), cp.data(),
+                                                       flag.data()});
+      b.for_each_index(w, detail::grow_sweep_kernel<1>{z.cview(w, h), lab.view(w, h), detail::make_projector(camera(w, h)),
+                                                       detail::make_noise(p.noise), p.grow_k, pl.data(), cp.data(),
+                                                       flag.data()});
+      changed.push_back(flag.host()[0]);
+      after.push_back(lab.host());
+      flag = device_array<std::int32_t, B>(b, 1, 0);
+    }
+    CHECK(changed == std::vector<std::int32_t>{1, 1, 0});
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        CAPTURE(x);
+        CAPTURE(y);
+        CHECK(after[0][at(w, x, y)] == (x < 20 ? 1 : 0));            // row 0, then every column left of the wall
+        CHECK(after[1][at(w, x, y)] == (x == 20 && y < h - 1 ? 0 : 1));  // through the gap, then up every column
+      }
+  }
+}

@@ -67,6 +67,51 @@ struct grow_kernel {
   }
 };
 
+/// Sweep form of plane-guided growth: work item i walks one whole row (Axis 0) or column (Axis 1)
+/// forward, then backward, in place; an unlabelled pixel with valid depth takes the label of the
+/// pixel just before it on the walk when its point lies within k * sigma(z) and cap[l] of that
+/// label's plane.  One sweep carries a label across a whole row, where a round of grow_kernel
+/// moves it one pixel.  Each item reads and writes only its own row or column: race-free, and the
+/// result does not depend on scheduling.
+template <int Axis>
+struct grow_sweep_kernel {
+  image_view<const float> depth;
+  image_view<std::uint16_t> labels;
+  projector proj;
+  noise_sigma sigma;
+  float k;
+  const float* planes;
+  const float* cap;
+  std::int32_t* changed;
+  EDGEPLANE_HD bool try_take(int x, int y, std::uint16_t l) const {
+    const float z = depth(x, y);
+    if (l == 0 || !(z > 0.f)) return false;
+    const point3 p = proj(x, y, z);
+    const float* q = planes + 4 * l;
+    const float d = fabsf(q[0] * p.x + q[1] * p.y + q[2] * p.z + q[3]);
+    return d <= k * sigma(z) && d <= cap[l];
+  }
+  EDGEPLANE_HD void operator()(std::int64_t i) const {
+    const int n = Axis == 0 ? labels.width : labels.height;
+    const int line = static_cast<int>(i);
+    bool any = false;
+    for (int pass = 0; pass < 2; ++pass) {
+      const int step = pass == 0 ? 1 : -1;
+      std::uint16_t prev = 0;
+      for (int t = pass == 0 ? 0 : n - 1; t >= 0 && t < n; t += step) {
+        const int x = Axis == 0 ? t : line, y = Axis == 0 ? line : t;
+        std::uint16_t& cur = labels(x, y);
+        if (cur == 0 && try_take(x, y, prev)) {
+          cur = prev;
+          any = true;
+        }
+        prev = cur;
+      }
+    }
+    if (any) atomic_store(changed, 1);
+  }
+};
+
 /// Label closing, dilation half: an unlabelled pixel takes the smallest label in its window.
 struct label_dilate_kernel {
   image_view<const std::uint16_t> in;
