@@ -169,6 +169,11 @@ inline params kinect1() {
   p.t_je = 0.03f;
   p.t_je_quad = 0.02f;
   p.t_size = 400;
+  // tuned on the kinect1 development scenes, each change kept only if neither half got worse
+  p.split_rounds = 1;
+  p.n_cue = 5;
+  p.t_ps = 0.05f;
+  p.t_cu = 0.045f;
   return p;
 }
 
@@ -176,12 +181,20 @@ inline params kinect1() {
 /// 1 m, depth quantised in 1.3 mm steps).
 inline params abw() {
   params p;
-  p.noise = {0.0008f, 0.0f};
+  p.noise = {0.001f, 0.0f};
+  p.noise_k = 0.75f;
   p.t_je = 0.01f;
-  p.t_size = 300;
   p.t_length = 8;
-  p.n_coe = 8;
+  p.n_coe = 24;
   p.n_cue = 6;
+  // tuned on the ABW development images (coordinate descent, each change kept only if neither
+  // half of the set got worse)
+  p.split_rounds = 3;
+  p.split_erode = 1;
+  p.t_size = 150;
+  p.t_ps = 0.05f;
+  p.grow_sweeps = true;
+  p.grow_iterations = 32;
   return p;
 }
 
