@@ -296,17 +296,10 @@ int run(const options& o) {
   ex::fail("unknown backend '" + o.backend + "'");  // parse() already checked
 }
 
-int error_exit(const std::string& what) {
-  std::fflush(stdout);
-  std::fprintf(stderr, "%s: error: %s\n", program, ex::one_line(what).c_str());
-  return 2;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
-  try {
-    ex::quiet_opencv_logging();
+  return ex::guarded_main(program, [&] {
     if (wants_help(argc, argv)) {
       print_usage();
       return 0;
@@ -314,19 +307,5 @@ int main(int argc, char** argv) {
     options o;
     parse(argc, argv, o);
     return run(o);
-  } catch (const ex::cli_error& e) {
-    return error_exit(e.what());
-  } catch (const edgeplane::error& e) {
-    return error_exit(e.what());
-  } catch (const edgeplane::backend_error& e) {
-    return error_exit(e.what());
-  } catch (const cv::Exception& e) {
-    return error_exit("OpenCV: " + e.msg);
-  } catch (const std::bad_alloc&) {
-    return error_exit("out of memory");
-  } catch (const std::exception& e) {
-    return error_exit(e.what());
-  } catch (...) {
-    return error_exit("unexpected exception");
-  }
+  });
 }

@@ -20,6 +20,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <new>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -289,6 +290,37 @@ inline cv::Mat load_depth_png(const std::string& path) {
 
 /// Keeps OpenCV's own logging quiet, so that a failure is reported once, by the program.
 inline void quiet_opencv_logging() { cv::utils::logging::setLogLevel(cv::utils::logging::LOG_LEVEL_SILENT); }
+
+/// Prints "PROGRAM: error: WHAT" on one line of stderr and returns the exit code 2.
+inline int error_exit(const char* program, const std::string& what) {
+  std::fflush(stdout);
+  std::fprintf(stderr, "%s: error: %s\n", program, one_line(what).c_str());
+  return 2;
+}
+
+/// Runs an example program's body: OpenCV's own logging silenced, and every exception turned into
+/// one line on stderr with exit code 2 (never a crash).
+template <class Body>
+int guarded_main(const char* program, Body&& body) {
+  try {
+    quiet_opencv_logging();
+    return body();
+  } catch (const cli_error& e) {
+    return error_exit(program, e.what());
+  } catch (const edgeplane::error& e) {
+    return error_exit(program, e.what());
+  } catch (const edgeplane::backend_error& e) {
+    return error_exit(program, e.what());
+  } catch (const cv::Exception& e) {
+    return error_exit(program, "OpenCV: " + e.msg);
+  } catch (const std::bad_alloc&) {
+    return error_exit(program, "out of memory");
+  } catch (const std::exception& e) {
+    return error_exit(program, e.what());
+  } catch (...) {
+    return error_exit(program, "unexpected exception");
+  }
+}
 
 // ---- outputs -----------------------------------------------------------------------------------
 

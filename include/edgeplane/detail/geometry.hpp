@@ -47,4 +47,10 @@ EDGEPLANE_HD inline float dist2_to_line(point3 p, point3 a, point3 b) {
 
 EDGEPLANE_HD inline bool valid_depth(float z) { return z > 0.f; }
 
+/// |n . p + d| for plane l of a table holding nx, ny, nz, d per plane (metres).
+EDGEPLANE_HD inline float plane_distance(const float* planes, int l, point3 p) {
+  const float* q = planes + 4 * l;
+  return fabsf(q[0] * p.x + q[1] * p.y + q[2] * p.z + q[3]);
+}
+
 }  // namespace edgeplane::detail

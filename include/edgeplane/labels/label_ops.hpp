@@ -54,8 +54,7 @@ struct grow_kernel {
       if (!in.contains(nx[j], ny[j])) continue;
       const std::uint16_t l = in(nx[j], ny[j]);
       if (l == 0 || l == best) continue;
-      const float* q = planes + 4 * l;
-      const float d = fabsf(q[0] * p.x + q[1] * p.y + q[2] * p.z + q[3]);
+      const float d = plane_distance(planes, l, p);
       if (d > cap[l]) continue;
       if (d <= best_d && (d < best_d || best == 0 || l < best)) {
         best_d = d;
@@ -87,8 +86,7 @@ struct grow_sweep_kernel {
     const float z = depth(x, y);
     if (l == 0 || !(z > 0.f)) return false;
     const point3 p = proj(x, y, z);
-    const float* q = planes + 4 * l;
-    const float d = fabsf(q[0] * p.x + q[1] * p.y + q[2] * p.z + q[3]);
+    const float d = plane_distance(planes, l, p);
     return d <= k * sigma(z) && d <= cap[l];
   }
   EDGEPLANE_HD void operator()(std::int64_t i) const {

@@ -61,8 +61,7 @@ struct inlier_labels {
     const float z = depth(x, y);
     if (g == 0 || !(z > 0.f)) return 0;
     const point3 p = proj(x, y, z);
-    const float* q = planes + 4 * g;
-    return fabsf(q[0] * p.x + q[1] * p.y + q[2] * p.z + q[3]) <= tol[g] ? g : 0;
+    return plane_distance(planes, g, p) <= tol[g] ? g : 0;
   }
 };
 
