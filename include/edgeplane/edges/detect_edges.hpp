@@ -62,9 +62,9 @@ inline edge_set make_edge_set(const params& p) {
 
 template <class Direction>
 EDGEPLANE_HD inline std::uint8_t edges_along(const edge_set& set, image_view<const float> depth, projector proj,
-                                             int x, int y) {
+                                             int x, int y, int reach, bool interior) {
   neighbourhood nb;
-  gather_along<Direction>(nb, depth, proj, x, y, set.reach());
+  gather_along<Direction>(nb, depth, proj, x, y, reach, interior);
   std::uint8_t bits = 0;
   if (set.use_jump && set.jump(nb)) bits |= edge_type::jump::bit;
   if (set.use_extrema && set.extrema(nb)) bits |= edge_type::extrema::bit;
@@ -73,22 +73,62 @@ EDGEPLANE_HD inline std::uint8_t edges_along(const edge_set& set, image_view<con
   return bits;
 }
 
+/// Flags of the interior pass, kept in the edge map's two spare bits until the edge pass
+/// overwrites each pixel: the row's (2r+1) window is valid and inside / the square one is.
+inline constexpr std::uint8_t interior_row_flag = 0x40, interior_flag = 0x80;
+
+/// Interior pass, rows (one work item per row): marks interior_row_flag on pixels whose
+/// horizontal window [x - r, x + r] lies inside the image and holds only valid depth.  Writes
+/// every pixel of the row (the flag or 0).
+struct interior_rows_kernel {
+  image_view<const float> depth;
+  image_view<std::uint8_t> flags;
+  int r;
+  EDGEPLANE_HD void operator()(std::int64_t row) const {
+    const int y = static_cast<int>(row);
+    int run = 0;  // valid pixels ending at x
+    for (int x = 0; x < depth.width; ++x) {
+      run = depth(x, y) > 0.f ? run + 1 : 0;
+      flags(x, y) = 0;
+      if (run >= 2 * r + 1) flags(x - r, y) = interior_row_flag;
+    }
+  }
+};
+/// Interior pass, columns (one work item per column): adds interior_flag where the vertical
+/// window of row flags [y - r, y + r] is complete, i.e. the whole (2r+1)^2 square is valid.
+struct interior_columns_kernel {
+  image_view<std::uint8_t> flags;
+  int r;
+  EDGEPLANE_HD void operator()(std::int64_t col) const {
+    const int x = static_cast<int>(col);
+    int run = 0;
+    for (int y = 0; y < flags.height; ++y) {
+      run = (flags(x, y) & interior_row_flag) ? run + 1 : 0;
+      if (run >= 2 * r + 1) flags(x, y - r) = static_cast<std::uint8_t>(flags(x, y - r) | interior_flag);
+    }
+  }
+};
+
 /// All enabled edge types along all four directions, one pass; invalid pixels get edge_invalid.
+/// Reads the interior flag the interior pass left in `edges` (a pixel whose whole window of
+/// `reach` is valid needs no neighbour counting) and overwrites the pixel with its edge bits.
 struct all_edges_kernel {
   image_view<const float> depth;
   image_view<std::uint8_t> edges;
   projector proj;
   edge_set set;
+  int reach;
   EDGEPLANE_HD void operator()(std::int64_t i) const {
     const int x = static_cast<int>(i % depth.width), y = static_cast<int>(i / depth.width);
     if (!(depth(x, y) > 0.f)) {
       edges(x, y) = edge_invalid;
       return;
     }
-    std::uint8_t b = edges_along<direction::horizontal>(set, depth, proj, x, y);
-    b |= edges_along<direction::vertical>(set, depth, proj, x, y);
-    b |= edges_along<direction::left_diagonal>(set, depth, proj, x, y);
-    b |= edges_along<direction::right_diagonal>(set, depth, proj, x, y);
+    const bool interior = (edges(x, y) & interior_flag) != 0;
+    std::uint8_t b = edges_along<direction::horizontal>(set, depth, proj, x, y, reach, interior);
+    b |= edges_along<direction::vertical>(set, depth, proj, x, y, reach, interior);
+    b |= edges_along<direction::left_diagonal>(set, depth, proj, x, y, reach, interior);
+    b |= edges_along<direction::right_diagonal>(set, depth, proj, x, y, reach, interior);
     edges(x, y) = b;
   }
 };
@@ -145,14 +185,19 @@ void detect_edge(const Backend& b, image_view<const float> depth, const intrinsi
 }
 
 /// All enabled edge types over the four directions in one pass: writes every pixel of `edges`
-/// (edge_bits; edge_invalid where depth is invalid).  Asynchronous on device backends.
+/// (edge_bits; edge_invalid where depth is invalid).  Two cheap passes first mark, in `edges`
+/// itself, the pixels whose whole neighbourhood is valid, so the edge pass reads only the
+/// neighbours each test needs.  Asynchronous on device backends.
 template <class Backend>
 void detect_edges(const Backend& b, image_view<const float> depth, const intrinsics& k, const params& p,
                   image_view<std::uint8_t> edges) {
   detail::check_intrinsics(k);
   detail::check_same_size(depth, edges, "depth", "edges");
-  b.for_each_index(depth.pixels(),
-                   detail::all_edges_kernel{depth, edges, detail::make_projector(k), detail::make_edge_set(p)});
+  const detail::edge_set set = detail::make_edge_set(p);
+  const int reach = set.reach();
+  b.for_each_index(depth.height, detail::interior_rows_kernel{depth, edges, reach});
+  b.for_each_index(depth.width, detail::interior_columns_kernel{edges, reach});
+  b.for_each_index(depth.pixels(), detail::all_edges_kernel{depth, edges, detail::make_projector(k), set, reach});
 }
 
 /// Closing (dilate, then erode) of the edge map with a (2r+1)^2 window: `mask` becomes 1 on edge

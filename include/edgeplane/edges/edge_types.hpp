@@ -33,8 +33,8 @@ struct jump {
   EDGEPLANE_HD int reach() const { return 1; }
   EDGEPLANE_HD bool operator()(const detail::neighbourhood& nb) const {
     const float t = t_abs + t_quad * nb.zc * nb.zc;
-    const float dl = nb.nl >= 1 ? fabsf(nb.zl[0] - nb.zc) : -1.f;
-    const float dr = nb.nr >= 1 ? fabsf(nb.zr[0] - nb.zc) : -1.f;
+    const float dl = nb.nl >= 1 ? fabsf(nb.zl(1) - nb.zc) : -1.f;
+    const float dr = nb.nr >= 1 ? fabsf(nb.zr(1) - nb.zc) : -1.f;
     const bool jl = dl > t + t_ratio * (dr > 0.f ? dr : 0.f);
     const bool jr = dr > t + t_ratio * (dl > 0.f ? dl : 0.f);
     return jl || jr;
@@ -52,8 +52,8 @@ struct extrema {
   EDGEPLANE_HD bool operator()(const detail::neighbourhood& nb) const {
     if (nb.nl < n || nb.nr < n) return false;
     bool nearer = true, farther = true;
-    for (int k = 0; k < n; ++k) {
-      const float a = nb.zl[k], b = nb.zr[k];
+    for (int k = 1; k <= n; ++k) {
+      const float a = nb.zl(k), b = nb.zr(k);
       nearer = nearer && nb.zc < t * a && nb.zc < t * b;
       farther = farther && nb.zc * t > a && nb.zc * t > b;
     }

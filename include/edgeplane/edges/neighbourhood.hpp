@@ -10,54 +10,61 @@ namespace edgeplane::detail {
 
 inline constexpr int max_arm = 32;  ///< longest neighbour array per side
 
-/// Depths of up to `max_arm` consecutive valid neighbours on each side of pixel (x, y) along
-/// (dx, dy); an arm ends at the image border or at the first invalid pixel.
+/// The two opposite neighbour arrays of pixel (x, y) along (dx, dy), read in place from the depth
+/// image: side arrays end at the image border or at the first invalid pixel, and hold at most
+/// `reach` neighbours (nl, nr).  Neighbour k (k = 1 is the nearest) is read only when k <= nl
+/// (left) or k <= nr (right).
 struct neighbourhood {
   projector proj;
   int x, y, dx, dy;
   float zc;
-  int nl, nr;  // valid neighbours gathered on the left (-dx,-dy) and right (+dx,+dy) sides
-  float zl[max_arm];
-  float zr[max_arm];
+  int nl, nr;             // valid neighbours on the left (-dx,-dy) and right (+dx,+dy) sides
+  const float* c;         // the centre pixel in the depth image
+  std::ptrdiff_t step;    // elements from one neighbour to the next along (dx, dy)
 
+  EDGEPLANE_HD float zl(int k) const { return c[-k * step]; }
+  EDGEPLANE_HD float zr(int k) const { return c[k * step]; }
   EDGEPLANE_HD point3 center() const { return proj(x, y, zc); }
   /// k-th neighbour (k = 1 is the nearest) on the left / right side.
-  EDGEPLANE_HD point3 left(int k) const { return proj(x - k * dx, y - k * dy, zl[k - 1]); }
-  EDGEPLANE_HD point3 right(int k) const { return proj(x + k * dx, y + k * dy, zr[k - 1]); }
+  EDGEPLANE_HD point3 left(int k) const { return proj(x - k * dx, y - k * dy, zl(k)); }
+  EDGEPLANE_HD point3 right(int k) const { return proj(x + k * dx, y + k * dy, zr(k)); }
   EDGEPLANE_HD point3 side(int s, int k) const { return s < 0 ? left(k) : right(k); }
   EDGEPLANE_HD int count(int s) const { return s < 0 ? nl : nr; }
 };
 
-/// Fills nb with up to `reach` neighbours per side.
-EDGEPLANE_HD inline void gather(neighbourhood& nb, image_view<const float> depth, int reach) {
-  nb.zc = depth(nb.x, nb.y);
+/// Counts up to `reach` valid neighbours per side.  `interior`: the caller knows that every pixel
+/// within `reach` of (x, y) (a square window) is inside the image and valid, so nothing is read.
+EDGEPLANE_HD inline void gather(neighbourhood& nb, image_view<const float> depth, int reach, bool interior = false) {
+  nb.c = &depth(nb.x, nb.y);
+  nb.step = static_cast<std::ptrdiff_t>(nb.dy) * depth.pitch + nb.dx;
+  nb.zc = *nb.c;
+  if (interior) {
+    nb.nl = nb.nr = reach;
+    return;
+  }
   nb.nl = nb.nr = 0;
   for (int k = 1; k <= reach; ++k) {
     const int u = nb.x - k * nb.dx, v = nb.y - k * nb.dy;
-    if (!depth.contains(u, v)) break;
-    const float z = depth(u, v);
-    if (!(z > 0.f)) break;
-    nb.zl[nb.nl++] = z;
+    if (!depth.contains(u, v) || !(depth(u, v) > 0.f)) break;
+    ++nb.nl;
   }
   for (int k = 1; k <= reach; ++k) {
     const int u = nb.x + k * nb.dx, v = nb.y + k * nb.dy;
-    if (!depth.contains(u, v)) break;
-    const float z = depth(u, v);
-    if (!(z > 0.f)) break;
-    nb.zr[nb.nr++] = z;
+    if (!depth.contains(u, v) || !(depth(u, v) > 0.f)) break;
+    ++nb.nr;
   }
 }
 
-/// Sets nb up for pixel (x, y) along Direction and gathers `reach` neighbours per side.
+/// Sets nb up for pixel (x, y) along Direction and counts up to `reach` neighbours per side.
 template <class Direction>
 EDGEPLANE_HD inline void gather_along(neighbourhood& nb, image_view<const float> depth, projector proj, int x, int y,
-                                      int reach) {
+                                      int reach, bool interior = false) {
   nb.proj = proj;
   nb.x = x;
   nb.y = y;
   nb.dx = Direction::dx;
   nb.dy = Direction::dy;
-  gather(nb, depth, reach);
+  gather(nb, depth, reach, interior);
 }
 
 /// Largest distance of the arm's inner points 1..m-1 on side s from the chord c -> P_m, and the
