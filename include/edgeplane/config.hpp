@@ -8,6 +8,16 @@
 #define EDGEPLANE_HD
 #endif
 
+// Forces inlining of the small predicates inside hot kernels, so that a pixel's shared terms (its
+// 3-D point, its noise allowance) are computed once for every test and direction.
+#if defined(__CUDACC__)
+#define EDGEPLANE_INLINE __forceinline__
+#elif defined(__GNUC__) || defined(__clang__)
+#define EDGEPLANE_INLINE inline __attribute__((always_inline))
+#else
+#define EDGEPLANE_INLINE inline
+#endif
+
 // Device code asserts only in debug builds (never in release kernels).
 #if !defined(NDEBUG) && !defined(__CUDA_ARCH__)
 #include <cassert>

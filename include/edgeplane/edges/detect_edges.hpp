@@ -61,7 +61,7 @@ inline edge_set make_edge_set(const params& p) {
 }
 
 template <class Direction>
-EDGEPLANE_HD inline std::uint8_t edges_along(const edge_set& set, image_view<const float> depth, projector proj,
+EDGEPLANE_HD EDGEPLANE_INLINE std::uint8_t edges_along(const edge_set& set, image_view<const float> depth, projector proj,
                                              int x, int y, int reach, bool interior) {
   neighbourhood nb;
   gather_along<Direction>(nb, depth, proj, x, y, reach, interior);
@@ -141,6 +141,14 @@ struct mask_dilate_kernel {
   EDGEPLANE_HD void operator()(std::int64_t i) const {
     const int x = static_cast<int>(i % in.width), y = static_cast<int>(i / in.width);
     std::uint8_t v = 0;
+    if (x >= r && y >= r && x < in.width - r && y < in.height - r) {  // the window is inside: no checks
+      for (int dy = -r; dy <= r; ++dy) {
+        const std::uint8_t* row = &in(x - r, y + dy);
+        for (int j = 0; j <= 2 * r; ++j) v = static_cast<std::uint8_t>(v | row[j]);
+      }
+      out(x, y) = v ? 1 : 0;
+      return;
+    }
     for (int dy = -r; dy <= r && !v; ++dy)
       for (int dx = -r; dx <= r; ++dx)
         if (in.contains(x + dx, y + dy) && in(x + dx, y + dy)) {
@@ -160,6 +168,10 @@ struct mask_erode_kernel {
   EDGEPLANE_HD void operator()(std::int64_t i) const {
     const int x = static_cast<int>(i % in.width), y = static_cast<int>(i / in.width);
     std::uint8_t v = 1;
+    if (!in(x, y)) {  // the centre is in its own window
+      out(x, y) = 0;
+      return;
+    }
     for (int dy = -r; dy <= r && v; ++dy)
       for (int dx = -r; dx <= r; ++dx)
         if (in.contains(x + dx, y + dy) && !in(x + dx, y + dy)) {

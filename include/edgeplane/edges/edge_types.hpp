@@ -31,7 +31,7 @@ struct jump {
   float t_abs, t_quad, t_ratio;
   static constexpr std::uint8_t bit = edge_jump;
   EDGEPLANE_HD int reach() const { return 1; }
-  EDGEPLANE_HD bool operator()(const detail::neighbourhood& nb) const {
+  EDGEPLANE_HD EDGEPLANE_INLINE bool operator()(const detail::neighbourhood& nb) const {
     const float t = t_abs + t_quad * nb.zc * nb.zc;
     const float dl = nb.nl >= 1 ? fabsf(nb.zl(1) - nb.zc) : -1.f;
     const float dr = nb.nr >= 1 ? fabsf(nb.zr(1) - nb.zc) : -1.f;
@@ -49,13 +49,14 @@ struct extrema {
   int n;
   static constexpr std::uint8_t bit = edge_extrema;
   EDGEPLANE_HD int reach() const { return n; }
-  EDGEPLANE_HD bool operator()(const detail::neighbourhood& nb) const {
+  EDGEPLANE_HD EDGEPLANE_INLINE bool operator()(const detail::neighbourhood& nb) const {
     if (nb.nl < n || nb.nr < n) return false;
     bool nearer = true, farther = true;
     for (int k = 1; k <= n; ++k) {
       const float a = nb.zl(k), b = nb.zr(k);
       nearer = nearer && nb.zc < t * a && nb.zc < t * b;
       farther = farther && nb.zc * t > a && nb.zc * t > b;
+      if (!nearer && !farther) return false;  // on a surface the nearest neighbours decide
     }
     return nearer || farther;
   }
@@ -72,7 +73,7 @@ struct corner {
   detail::noise_sigma sigma;
   static constexpr std::uint8_t bit = edge_corner;
   EDGEPLANE_HD int reach() const { return n; }
-  EDGEPLANE_HD bool operator()(const detail::neighbourhood& nb) const {
+  EDGEPLANE_HD EDGEPLANE_INLINE bool operator()(const detail::neighbourhood& nb) const {
     if (nb.nl < n || nb.nr < n) return false;
     const float noise = noise_k * sigma(nb.zc);
     // The cheap test first (one distance): on flat surfaces c lies on the chord and we stop here.
@@ -100,7 +101,7 @@ struct curved {
   detail::noise_sigma sigma;
   static constexpr std::uint8_t bit = edge_curved;
   EDGEPLANE_HD int reach() const { return n; }
-  EDGEPLANE_HD bool arc_like(const detail::neighbourhood& nb, int s, float noise) const {
+  EDGEPLANE_HD EDGEPLANE_INLINE bool arc_like(const detail::neighbourhood& nb, int s, float noise) const {
     const detail::point3 c = nb.center(), e = nb.side(s, n);
     const float chord = detail::norm(e - c);
     const int q1 = n / 4 > 0 ? n / 4 : 1, mid = n / 2 > 0 ? n / 2 : 1, q3 = (3 * n) / 4;
@@ -110,14 +111,14 @@ struct curved {
     const float d3 = sqrtf(detail::dist2_to_line(nb.side(s, q3), c, e));
     return d1 >= 0.6f * dm && d3 >= 0.6f * dm;
   }
-  EDGEPLANE_HD bool straight(const detail::neighbourhood& nb, int s, float noise) const {
+  EDGEPLANE_HD EDGEPLANE_INLINE bool straight(const detail::neighbourhood& nb, int s, float noise) const {
     float dev, len;
     detail::arm_deviation(nb, s, n, dev, len);
     return dev <= t_straight * len + noise;
   }
   // Exactly one arm straight and the other arc-like: at most one side can be the bent one, so test
   // each side's cheap arc shape (3 distances) first and scan the arms only where it holds.
-  EDGEPLANE_HD bool operator()(const detail::neighbourhood& nb) const {
+  EDGEPLANE_HD EDGEPLANE_INLINE bool operator()(const detail::neighbourhood& nb) const {
     if (nb.nl < n || nb.nr < n) return false;
     const float noise = noise_k * sigma(nb.zc);
     for (int s = -1; s <= 1; s += 2)

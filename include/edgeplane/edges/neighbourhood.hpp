@@ -22,19 +22,19 @@ struct neighbourhood {
   const float* c;         // the centre pixel in the depth image
   std::ptrdiff_t step;    // elements from one neighbour to the next along (dx, dy)
 
-  EDGEPLANE_HD float zl(int k) const { return c[-k * step]; }
-  EDGEPLANE_HD float zr(int k) const { return c[k * step]; }
-  EDGEPLANE_HD point3 center() const { return proj(x, y, zc); }
+  EDGEPLANE_HD EDGEPLANE_INLINE float zl(int k) const { return c[-k * step]; }
+  EDGEPLANE_HD EDGEPLANE_INLINE float zr(int k) const { return c[k * step]; }
+  EDGEPLANE_HD EDGEPLANE_INLINE point3 center() const { return proj(x, y, zc); }
   /// k-th neighbour (k = 1 is the nearest) on the left / right side.
-  EDGEPLANE_HD point3 left(int k) const { return proj(x - k * dx, y - k * dy, zl(k)); }
-  EDGEPLANE_HD point3 right(int k) const { return proj(x + k * dx, y + k * dy, zr(k)); }
-  EDGEPLANE_HD point3 side(int s, int k) const { return s < 0 ? left(k) : right(k); }
-  EDGEPLANE_HD int count(int s) const { return s < 0 ? nl : nr; }
+  EDGEPLANE_HD EDGEPLANE_INLINE point3 left(int k) const { return proj(x - k * dx, y - k * dy, zl(k)); }
+  EDGEPLANE_HD EDGEPLANE_INLINE point3 right(int k) const { return proj(x + k * dx, y + k * dy, zr(k)); }
+  EDGEPLANE_HD EDGEPLANE_INLINE point3 side(int s, int k) const { return s < 0 ? left(k) : right(k); }
+  EDGEPLANE_HD EDGEPLANE_INLINE int count(int s) const { return s < 0 ? nl : nr; }
 };
 
 /// Counts up to `reach` valid neighbours per side.  `interior`: the caller knows that every pixel
 /// within `reach` of (x, y) (a square window) is inside the image and valid, so nothing is read.
-EDGEPLANE_HD inline void gather(neighbourhood& nb, image_view<const float> depth, int reach, bool interior = false) {
+EDGEPLANE_HD EDGEPLANE_INLINE void gather(neighbourhood& nb, image_view<const float> depth, int reach, bool interior = false) {
   nb.c = &depth(nb.x, nb.y);
   nb.step = static_cast<std::ptrdiff_t>(nb.dy) * depth.pitch + nb.dx;
   nb.zc = *nb.c;
@@ -57,7 +57,7 @@ EDGEPLANE_HD inline void gather(neighbourhood& nb, image_view<const float> depth
 
 /// Sets nb up for pixel (x, y) along Direction and counts up to `reach` neighbours per side.
 template <class Direction>
-EDGEPLANE_HD inline void gather_along(neighbourhood& nb, image_view<const float> depth, projector proj, int x, int y,
+EDGEPLANE_HD EDGEPLANE_INLINE void gather_along(neighbourhood& nb, image_view<const float> depth, projector proj, int x, int y,
                                       int reach, bool interior = false) {
   nb.proj = proj;
   nb.x = x;
@@ -69,7 +69,7 @@ EDGEPLANE_HD inline void gather_along(neighbourhood& nb, image_view<const float>
 
 /// Largest distance of the arm's inner points 1..m-1 on side s from the chord c -> P_m, and the
 /// chord's length.
-EDGEPLANE_HD inline void arm_deviation(const neighbourhood& nb, int s, int m, float& max_dev, float& chord) {
+EDGEPLANE_HD EDGEPLANE_INLINE void arm_deviation(const neighbourhood& nb, int s, int m, float& max_dev, float& chord) {
   const point3 c = nb.center(), e = nb.side(s, m);
   float worst = 0.f;
   for (int k = 1; k < m; ++k) {
