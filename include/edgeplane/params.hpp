@@ -26,7 +26,7 @@ struct params {
   int depth_closing_radius = 1;  ///< closing filter half-size (pixels) that fills pepper holes; 0 = off
   bool downscale = false;        ///< process at half resolution (labels are returned at full size)
   float min_depth = 0.05f;       ///< metres; smaller depths are invalid
-  float max_depth = 20.f;        ///< metres; larger depths are invalid
+  float max_depth = 20.f;        ///< metres; larger depths are invalid (and any beyond fixed_point_max_depth)
 
   noise_model noise{};
   int smooth_radius = 2;     ///< edge-preserving smoothing window half-size (pixels); 0 = off

@@ -258,7 +258,10 @@ class segmenter {
       src = image_view<const In>{dst, w, h, w};
     }
     const auto za = view(z_a_.data(), w, h), zb = view(z_b_.data(), w, h), zc = view(z_c_.data(), w, h);
-    convert_depth(b_, src, scale, p_.min_depth, p_.max_depth, za);
+    // Deeper than the exact fixed-point statistics hold (hundreds of metres for real cameras) is
+    // invalid, like depth beyond max_depth.
+    const float max_depth = std::min(p_.max_depth, fixed_point_max_depth(k, w, h));
+    convert_depth(b_, src, scale, p_.min_depth, max_depth, za);
     image_view<float> z_full = za;
     if (p_.depth_closing_radius > 0) {
       close_depth(b_, za, zb, zc, p_.depth_closing_radius);

@@ -2,6 +2,7 @@
 // checked against the planes they were built from.
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -218,6 +219,22 @@ TEST_CASE("segmenter: degenerate data gives a well-defined empty result") {
     std::vector<std::uint16_t> l(z.size(), 7);
     CHECK(seg.segment(make_view(static_cast<const float*>(z.data()), 40, 30), k, make_view(l.data(), 40, 30)).planes.empty());
   }
+}
+
+TEST_CASE("segmenter: depth beyond what the fixed-point statistics hold is invalid, not an overflow") {
+  // A wall at 2 m, 160 x 120.
+  std::vector<float> z(160 * 120, 2.0f);
+  std::vector<std::uint16_t> l(z.size(), 7);
+  const auto zv = make_view(static_cast<const float*>(z.data()), 160, 120);
+  params p = presets::thesis_full();
+  p.max_depth = 1000.f;  // far beyond: normal frames are unaffected
+  segmenter<cpu> seg(p);
+  CHECK(seg.segment(zv, test::kinect2_intrinsics(160, 120), make_view(l.data(), 160, 120)).planes.size() == 1);
+  // A denormal focal length would put lateral coordinates at 1e40 m: every pixel is invalid (the
+  // fuzzer found the int64 sums of squares overflowing here), so the frame has no planes.
+  const auto res = seg.segment(zv, intrinsics{7.8e-41f, 269.f, 80.f, 60.f}, make_view(l.data(), 160, 120));
+  CHECK(res.planes.empty());
+  CHECK(std::all_of(l.begin(), l.end(), [](std::uint16_t v) { return v == 0; }));
 }
 
 TEST_CASE("segmenter: unusable arguments throw edgeplane::error") {

@@ -2,6 +2,7 @@
 // bounding boxes, and the determinism of the fixed-point sums.
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <vector>
@@ -198,5 +199,29 @@ TEST_CASE_TEMPLATE("inlier_labels: the refit ignores a candidate's off-plane rim
     const auto m2h = m2.host();
     CHECK(fit_plane(m2h.data() + moment_slots).points == 40 * 18);
     CHECK(fit_plane(m2h.data() + 2 * moment_slots).points == 40 * 18);
+  }
+}
+
+TEST_CASE("fixed_point_max_depth: hundreds of metres for real cameras, nothing for absurd intrinsics") {
+  // Kinect v1 at 640x480: coordinates stay within depth (|u - cx| < fx), so the bound is the depth's:
+  // sqrt(4e18 / 307200) units of 0.1 mm = 361 m.
+  const float kinect = fixed_point_max_depth(intrinsics{525.f, 525.f, 319.5f, 239.5f}, 640, 480);
+  CHECK(kinect == doctest::Approx(360.8).epsilon(0.01));
+  // A wide lens spreads the lateral coordinates: twice |u - cx| / fx halves the bound.
+  const float wide = fixed_point_max_depth(intrinsics{160.f, 160.f, 319.5f, 239.5f}, 640, 480);
+  CHECK(wide == doctest::Approx(kinect * 160.0 / 320.0).epsilon(0.01));
+  // The same camera at twice the resolution: four times the pixels, half the bound.
+  CHECK(fixed_point_max_depth(intrinsics{1050.f, 1050.f, 639.5f, 479.5f}, 1280, 960) ==
+        doctest::Approx(kinect / 2).epsilon(0.01));
+  // A denormal focal length (found by the fuzzer: the sums of squares overflowed int64).
+  CHECK(fixed_point_max_depth(intrinsics{7.8e-41f, 269.f, 60.f, 48.f}, 64, 48) < 1e-30f);
+  // At the bound, one label covering the whole image: every sum of squares fits in 2^62.
+  for (const intrinsics k : {intrinsics{525.f, 525.f, 319.5f, 239.5f}, intrinsics{50.f, 60.f, -100.f, 700.f}}) {
+    const int w = 640, h = 480;
+    const double z = fixed_point_max_depth(k, w, h);
+    const double u = std::max(std::abs(double(k.cx)), std::abs(w - 1 - double(k.cx)));
+    const double v = std::max(std::abs(double(k.cy)), std::abs(h - 1 - double(k.cy)));
+    const double coord = std::max({z, u * z / k.fx, v * z / k.fy}) * fixed_per_metre + 0.5;
+    CHECK(double(w) * h * coord * coord <= std::ldexp(1.0, 62));
   }
 }

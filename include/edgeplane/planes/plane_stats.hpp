@@ -2,9 +2,11 @@
 // fixed-point unit (0.1 mm): integer sums are exact whatever the order of the additions, so the
 // statistics, and every decision taken on them, are identical across threads and backends.
 #pragma once
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include <Eigen/Dense>
@@ -13,6 +15,7 @@
 #include "edgeplane/camera.hpp"
 #include "edgeplane/config.hpp"
 #include "edgeplane/detail/geometry.hpp"
+#include "edgeplane/error.hpp"
 #include "edgeplane/image.hpp"
 
 namespace edgeplane {
@@ -21,6 +24,22 @@ namespace edgeplane {
 /// (bounding box min x, min y, max x, max y) per label in a separate array.
 inline constexpr int moment_slots = 11;  // points, x, y, z, xx, xy, xz, yy, yz, zz, labelled pixels
 inline constexpr double fixed_per_metre = 1e4;
+
+/// The largest depth (metres) whose points the fixed-point moments of a w x h image hold exactly
+/// under intrinsics k.  One label may cover every pixel, so w * h squared coordinates, in units of
+/// 1 / fixed_per_metre, must stay below 2^62; a point at depth z has coordinates up to
+/// z * max(1, |u - cx| / |fx|, |v - cy| / |fy|).  For a 640x480 Kinect frame this is about 360 m;
+/// for absurd intrinsics (a focal length of a thousandth of a pixel) it is tiny.  The segmenter
+/// treats deeper pixels as invalid, so such frames give a well-defined (usually empty) result.
+inline float fixed_point_max_depth(const intrinsics& k, int w, int h) {
+  const double u = std::max(std::abs(double(k.cx)), std::abs(double(w - 1) - k.cx));
+  const double v = std::max(std::abs(double(k.cy)), std::abs(double(h - 1) - k.cy));
+  const double spread = std::max({1.0, u / std::abs(double(k.fx)), v / std::abs(double(k.fy))});
+  const double n = std::max(1.0, double(w) * double(h));
+  const double max_units = std::sqrt(4.0e18 / n) * (1.0 - 1e-6) - 2.0;  // float rounding, llrint half a unit
+  const double z = max_units / fixed_per_metre / spread;
+  return std::isfinite(z) ? static_cast<float>(std::min(z, 1.0e6)) : 0.f;
+}
 
 namespace detail {
 
@@ -186,6 +205,8 @@ inline plane_fit fit_plane(const std::uint64_t* m, const std::int32_t* bb = null
 /// Accumulates the moments and bounding boxes of labels 1..num_labels (label_of(i) gives pixel
 /// i's label) into backend buffers `moments` ((num_labels + 1) * moment_slots) and `bbox`
 /// ((num_labels + 1) * 4), which this call clears first.  Asynchronous on device backends.
+/// Precondition: valid depths are at most fixed_point_max_depth(k, w, h) (the segmenter's depth
+/// conversion ensures it), so that the fixed-point sums are exact.
 template <class Backend, class Labels>
 void accumulate_moments(const Backend& b, image_view<const float> depth, const intrinsics& k, Labels label_of,
                         std::int32_t num_labels, std::uint64_t* moments, std::int32_t* bbox) {
