@@ -6,6 +6,8 @@
 #include <array>
 #include <chrono>
 #include <cstdint>
+#include <string>
+#include <type_traits>
 #include <vector>
 
 #include "edgeplane/backend/buffer.hpp"
@@ -124,7 +126,32 @@ class segmenter {
   void segment(image_view<const In> depth, float scale, const intrinsics& k, image_view<std::uint16_t> labels,
                segmentation_result& out) {
     static_assert(std::is_same_v<In, std::uint16_t> || std::is_same_v<In, float>, "uint16 or float depth");
-    run(depth, scale, k, labels, out);
+    run(depth, scale, k, labels, out, false);
+  }
+
+  /// As segment(), but `depth` and `labels` are in the BACKEND's memory (device pointers for
+  /// edgeplane::cuda, any pitch): the frame is neither uploaded nor are its labels downloaded,
+  /// only the few per-plane numbers cross to the host.  Returns when the labels are written.
+  /// For host backends this is segment().
+  template <class In>
+  void segment_on_backend(image_view<const In> depth, float scale, const intrinsics& k,
+                          image_view<std::uint16_t> labels, segmentation_result& out) {
+    static_assert(std::is_same_v<In, std::uint16_t> || std::is_same_v<In, float>, "uint16 or float depth");
+    run(depth, scale, k, labels, out, true);
+  }
+
+  /// Offline throughput: segments frames[i] (one camera: intrinsics k for all) into labels[i]
+  /// (host memory) with this segmenter, results[i] receiving each frame's planes and times.
+  /// Throws edgeplane::error before any work when the counts differ; a frame whose arguments are
+  /// unusable throws when its turn comes (the frames before it are done).
+  template <class In>
+  void segment_batch(const std::vector<image_view<const In>>& frames, float scale, const intrinsics& k,
+                     const std::vector<image_view<std::uint16_t>>& labels, std::vector<segmentation_result>& results) {
+    detail::require(frames.size() == labels.size(), "segment_batch: " + std::to_string(frames.size()) +
+                                                        " frames but " + std::to_string(labels.size()) +
+                                                        " label images");
+    results.resize(frames.size());
+    for (std::size_t i = 0; i < frames.size(); ++i) segment(frames[i], scale, k, labels[i], results[i]);
   }
 
   /// The edge map (edge_bits) and the closed edge mask of the last frame, at processing resolution,
@@ -221,7 +248,7 @@ class segmenter {
 
   template <class In>
   void run(image_view<const In> depth_in, float scale, const intrinsics& k, image_view<std::uint16_t> labels_out,
-           segmentation_result& out) {
+           segmentation_result& out, bool on_backend) {
     auto t0 = clock::now(), t = t0;
     out.planes.clear();
     out.times = {};
@@ -247,7 +274,7 @@ class segmenter {
     z_b_.resize(n_full);
     z_c_.resize(n_full);
     image_view<const In> src = depth_in;
-    if constexpr (!Backend::host_accessible) {
+    if (!Backend::host_accessible && !on_backend) {
       raw_in_.resize(n_full * sizeof(In));
       In* dst = reinterpret_cast<In*>(raw_in_.data());
       if (depth_in.pitch == w)  // dense: one copy
@@ -479,12 +506,17 @@ class segmenter {
       pl.bbox = f.bbox;
       out.planes.push_back(pl);
     }
+    auto copy_out = [&](void* to, const void* from, std::size_t bytes) {
+      if (on_backend)
+        b_.copy(to, from, bytes);
+      else
+        b_.copy_to_host(to, from, bytes);
+    };
     if (labels_out.pitch == w)  // dense: one copy
-      b_.copy_to_host(labels_out.data, final_labels.data, sizeof(std::uint16_t) * n_full);
+      copy_out(labels_out.data, final_labels.data, sizeof(std::uint16_t) * n_full);
     else
       for (int y = 0; y < h; ++y)
-        b_.copy_to_host(&labels_out(0, y), final_labels.data + static_cast<std::int64_t>(y) * w,
-                        sizeof(std::uint16_t) * w);
+        copy_out(&labels_out(0, y), final_labels.data + static_cast<std::int64_t>(y) * w, sizeof(std::uint16_t) * w);
     b_.synchronize();
     out.times.finalize = ms_since(t);
     out.times.total = std::chrono::duration<double, std::milli>(clock::now() - t0).count();

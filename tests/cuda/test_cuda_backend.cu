@@ -445,6 +445,36 @@ TEST_CASE("cuda segmenter: float depth, pitched rows, half resolution with odd s
       check_same_segmentation(segment(cs, mm, 0.001f, r.k, w, h, w), segment(gs, mm, 0.001f, r.k, w, h, w));
     }
   }
+  SUBCASE("device pointers in and out (segment_on_backend): no upload or download, the same result") {
+    const ep::test::rendered r = frame(sc.s, sc.pose, 512, 424, 13);
+    const int pitch = 512 + 7;
+    const auto mm = pitched_mm(r, pitch);
+    ep::segmenter<ep::cpu> cs(ep::presets::kinect2());
+    const auto c = segment(cs, mm, 0.001f, r.k, r.width, r.height, pitch);
+    const ep::cuda b{s.s};
+    ep::buffer<std::uint16_t, ep::cuda> d_depth(b), d_labels(b);
+    d_depth.resize(mm.size());
+    d_labels.resize(mm.size());
+    b.copy_from_host(d_depth.data(), mm.data(), mm.size() * sizeof(std::uint16_t));
+    b.memset(d_labels.data(), 0xff, mm.size() * sizeof(std::uint16_t));
+    ep::segmenter<ep::cuda> gs(ep::presets::kinect2(), b);
+    segmenter_output g;
+    gs.segment_on_backend(ep::make_view<const std::uint16_t>(d_depth.data(), r.width, r.height, pitch), 0.001f, r.k,
+                          ep::make_view(d_labels.data(), r.width, r.height, pitch), g.result);
+    std::vector<std::uint16_t> padded(mm.size());
+    b.copy_to_host(padded.data(), d_labels.data(), padded.size() * sizeof(std::uint16_t));
+    g.labels.resize(static_cast<std::size_t>(r.width) * r.height);
+    for (int y = 0; y < r.height; ++y)
+      for (int x = 0; x < r.width; ++x)
+        g.labels[static_cast<std::size_t>(y) * r.width + x] = padded[static_cast<std::size_t>(y) * pitch + x];
+    CHECK(padded[static_cast<std::size_t>(pitch) - 1] == 0xffff);  // the row padding is untouched
+    const auto em = gs.edge_map(), mk = gs.edge_mask();
+    g.edge_map.resize(static_cast<std::size_t>(em.pixels()));
+    g.edge_mask.resize(static_cast<std::size_t>(mk.pixels()));
+    b.copy_to_host(g.edge_map.data(), em.data, g.edge_map.size());
+    b.copy_to_host(g.edge_mask.data(), mk.data, g.edge_mask.size());
+    check_same_segmentation(c, g);
+  }
   SUBCASE("an all-invalid frame gives no planes and all-zero labels") {
     const std::vector<std::uint16_t> zeros(64 * 48, 0);
     ep::segmenter<ep::cuda> gs(ep::presets::thesis_full(), ep::cuda{s.s});

@@ -221,6 +221,63 @@ TEST_CASE("segmenter: degenerate data gives a well-defined empty result") {
   }
 }
 
+TEST_CASE("segmenter: segment_on_backend and segment_batch give what segment gives") {
+  const auto s = test::room_with_box();
+  std::vector<rendered> frames;
+  for (int i = 0; i < 3; ++i)  // one camera, moving
+    frames.push_back(test::render(s, test::look_at({0.1 * i, -1.2, 1.3}, {2.6, 0.9 - 0.1 * i, 0.4}), 192, 160,
+                                  test::kinect2_intrinsics(192, 160), {0.001, 0.0005, 0.01, 30ull + i}));
+  const params p = presets::thesis_half();
+  std::vector<std::vector<std::uint16_t>> mm, want;
+  std::vector<std::size_t> want_planes;
+  for (const auto& r : frames) {
+    mm.push_back(r.depth_mm());
+    want.emplace_back(mm.back().size());
+    segmenter<cpu> fresh(p);
+    want_planes.push_back(fresh.segment(make_view(static_cast<const std::uint16_t*>(mm.back().data()), r.width, r.height),
+                                        0.001f, r.k, make_view(want.back().data(), r.width, r.height))
+                              .planes.size());
+    CHECK(want_planes.back() >= 2);
+  }
+  segmenter<cpu> seg(p);
+  SUBCASE("backend memory, pitched rows") {
+    const rendered& r = frames[1];
+    const int pitch = r.width + 5;
+    std::vector<std::uint16_t> in(static_cast<std::size_t>(pitch) * r.height, 0), out(in.size(), 0xbeef);
+    for (int y = 0; y < r.height; ++y)
+      std::copy_n(mm[1].begin() + static_cast<std::ptrdiff_t>(y) * r.width, r.width, in.begin() + static_cast<std::ptrdiff_t>(y) * pitch);
+    segmentation_result res;
+    seg.segment_on_backend(make_view(static_cast<const std::uint16_t*>(in.data()), r.width, r.height, pitch), 0.001f, r.k,
+                           make_view(out.data(), r.width, r.height, pitch), res);
+    CHECK(res.planes.size() == want_planes[1]);
+    int differ = 0;
+    for (int y = 0; y < r.height; ++y) {
+      for (int x = 0; x < r.width; ++x) differ += out[static_cast<std::size_t>(y) * pitch + x] != want[1][static_cast<std::size_t>(y) * r.width + x];
+      CHECK(out[static_cast<std::size_t>(y) * pitch + r.width] == 0xbeef);  // padding untouched
+    }
+    CHECK(differ == 0);
+  }
+  SUBCASE("a batch of frames of different sizes") {
+    std::vector<image_view<const std::uint16_t>> in;
+    std::vector<std::vector<std::uint16_t>> out;
+    std::vector<image_view<std::uint16_t>> out_views;
+    for (std::size_t i = 0; i < frames.size(); ++i) {
+      in.push_back(make_view(static_cast<const std::uint16_t*>(mm[i].data()), frames[i].width, frames[i].height));
+      out.emplace_back(mm[i].size(), 0xbeef);
+    }
+    for (std::size_t i = 0; i < frames.size(); ++i) out_views.push_back(make_view(out[i].data(), frames[i].width, frames[i].height));
+    std::vector<segmentation_result> results;
+    seg.segment_batch(in, 0.001f, frames[0].k, out_views, results);
+    REQUIRE(results.size() == frames.size());
+    for (std::size_t i = 0; i < frames.size(); ++i) {
+      CHECK(out[i] == want[i]);
+      CHECK(results[i].planes.size() == want_planes[i]);
+    }
+    out_views.pop_back();
+    CHECK_THROWS_AS(seg.segment_batch(in, 0.001f, frames[0].k, out_views, results), edgeplane::error);
+  }
+}
+
 TEST_CASE("segmenter: depth beyond what the fixed-point statistics hold is invalid, not an overflow") {
   // A wall at 2 m, 160 x 120.
   std::vector<float> z(160 * 120, 2.0f);

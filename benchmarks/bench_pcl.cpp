@@ -1,0 +1,169 @@
+// edgeplane against PCL's OrganizedMultiPlaneSegmentation (with its IntegralImageNormalEstimation
+// normals), side by side in one run on the same frames: the room scene of bench_cpu.cpp at
+// 256x212, 512x424 and 640x480 and, when built with OpenCV, the three real sample frames of
+// examples/data (TUM RGB-D, ICL-NUIM, CAPE; 640x480).  Built only when PCL is found.
+//
+// Each iteration of `ratio` runs PCL once and edgeplane once (uint16 depth in; PCL's time includes
+// building its organized point cloud, as a PCL user must) and times each with a steady clock; the
+// counters are the medians of those times and their ratio (PCL / edgeplane: how many times
+// faster edgeplane is).  edgeplane runs its `thesis_full` preset on both cores (`cpu`) and on one
+// (`cpu serial`); PCL runs the configuration of its organized segmentation demo: average 3-D
+// gradient normals (max depth change 0.02, smoothing 10), 1000 minimum inliers, 3 degrees, 2 cm,
+// with refinement.  PCL's normal estimation and segmentation are single-threaded.
+#include <benchmark/benchmark.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include <pcl/features/integral_image_normal.h>
+#include <pcl/point_cloud.h>
+#include <pcl/point_types.h>
+#include <pcl/segmentation/organized_multi_plane_segmentation.h>
+
+#ifdef EDGEPLANE_BENCH_WITH_OPENCV
+#include <opencv2/imgcodecs.hpp>
+#endif
+
+#include "bench_frames.hpp"
+#include "edgeplane/edgeplane.hpp"
+
+namespace {
+namespace ep = edgeplane;
+
+struct depth_frame {
+  int w = 0, h = 0;
+  ep::intrinsics k;
+  float scale = 0.001f;  // metres per unit
+  std::vector<std::uint16_t> depth;
+};
+
+/// PCL's organized multi-plane segmentation of one uint16 frame; returns the number of planes.
+class pcl_segmenter {
+ public:
+  pcl_segmenter() {
+    ne_.setNormalEstimationMethod(ne_.AVERAGE_3D_GRADIENT);
+    ne_.setMaxDepthChangeFactor(0.02f);
+    ne_.setNormalSmoothingSize(10.0f);
+    mps_.setMinInliers(1000);
+    mps_.setAngularThreshold(3.0 * M_PI / 180.0);
+    mps_.setDistanceThreshold(0.02);
+  }
+  std::size_t run(const depth_frame& f) {
+    cloud_->width = static_cast<std::uint32_t>(f.w);
+    cloud_->height = static_cast<std::uint32_t>(f.h);
+    cloud_->is_dense = false;
+    cloud_->points.resize(static_cast<std::size_t>(f.w) * f.h);
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    for (int v = 0; v < f.h; ++v)
+      for (int u = 0; u < f.w; ++u) {
+        const std::size_t i = static_cast<std::size_t>(v) * f.w + u;
+        const float z = f.depth[i] * f.scale;
+        pcl::PointXYZ& p = cloud_->points[i];
+        if (z > 0.f)
+          p = pcl::PointXYZ((u - f.k.cx) * z / f.k.fx, (v - f.k.cy) * z / f.k.fy, z);
+        else
+          p = pcl::PointXYZ(nan, nan, nan);
+      }
+    ne_.setInputCloud(cloud_);
+    ne_.compute(*normals_);
+    mps_.setInputNormals(normals_);
+    mps_.setInputCloud(cloud_);
+    regions_.clear();
+    mps_.segmentAndRefine(regions_);
+    return regions_.size();
+  }
+
+ private:
+  pcl::PointCloud<pcl::PointXYZ>::Ptr cloud_{new pcl::PointCloud<pcl::PointXYZ>};
+  pcl::PointCloud<pcl::Normal>::Ptr normals_{new pcl::PointCloud<pcl::Normal>};
+  pcl::IntegralImageNormalEstimation<pcl::PointXYZ, pcl::Normal> ne_;
+  pcl::OrganizedMultiPlaneSegmentation<pcl::PointXYZ, pcl::Normal, pcl::Label> mps_;
+  std::vector<pcl::PlanarRegion<pcl::PointXYZ>, Eigen::aligned_allocator<pcl::PlanarRegion<pcl::PointXYZ>>> regions_;
+};
+
+depth_frame room(int w, int h) {
+  const auto& f = ep::bench::scene_at(w, h);
+  return {w, h, f.r.k, 0.001f, f.mm};
+}
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v.empty() ? 0.0 : v[v.size() / 2];
+}
+
+void ratio(benchmark::State& st, depth_frame f, ep::cpu backend) {
+  pcl_segmenter pcl_seg;
+  ep::segmenter<ep::cpu> seg(ep::presets::thesis_full(), backend);
+  std::vector<std::uint16_t> labels(f.depth.size());
+  ep::segmentation_result res;
+  const auto depth = ep::make_view(static_cast<const std::uint16_t*>(f.depth.data()), f.w, f.h);
+  const auto out = ep::make_view(labels.data(), f.w, f.h);
+  std::size_t pcl_planes = pcl_seg.run(f);  // warm-up of both
+  seg.segment(depth, f.scale, f.k, out, res);
+  std::vector<double> t_pcl, t_ep;
+  using clock = std::chrono::steady_clock;
+  for (auto _ : st) {
+    const auto t0 = clock::now();
+    pcl_planes = pcl_seg.run(f);
+    const auto t1 = clock::now();
+    seg.segment(depth, f.scale, f.k, out, res);
+    const auto t2 = clock::now();
+    benchmark::DoNotOptimize(labels.data());
+    t_pcl.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());
+    t_ep.push_back(std::chrono::duration<double, std::milli>(t2 - t1).count());
+    st.SetIterationTime(std::chrono::duration<double>(t2 - t0).count());
+  }
+  const double mp = median(t_pcl), me = median(t_ep);
+  st.counters["pcl_ms"] = mp;
+  st.counters["edgeplane_ms"] = me;
+  st.counters["pcl_over_edgeplane"] = me > 0 ? mp / me : 0.0;
+  st.counters["pcl_planes"] = static_cast<double>(pcl_planes);
+  st.counters["edgeplane_planes"] = static_cast<double>(res.planes.size());
+}
+
+void register_all() {
+  const ep::cpu both{ep::cpu::mode::parallel}, one{ep::cpu::mode::serial};
+  std::vector<std::pair<std::string, depth_frame>> frames;
+  for (auto [w, h] : {std::pair{256, 212}, std::pair{512, 424}, std::pair{640, 480}})
+    frames.emplace_back("room/" + std::to_string(w) + "x" + std::to_string(h), room(w, h));
+#ifdef EDGEPLANE_BENCH_WITH_OPENCV
+  struct sample {
+    const char* name;
+    const char* file;
+    ep::intrinsics k;
+    float scale;
+  };
+  const sample samples[] = {
+      {"tum", "tum_fr3_long_office.png", {535.4f, 539.2f, 320.1f, 247.6f}, 0.0002f},
+      {"icl", "icl_living_room.png", {481.2f, -480.0f, 319.5f, 239.5f}, 0.0002f},
+      {"cape", "cape_depth_0.png", {575.9268544880447f, 576.4079160109325f, 315.1502635638817f, 230.58580662101753f},
+       0.001f}};
+  for (const sample& s : samples) {
+    const cv::Mat m = cv::imread(std::string(EDGEPLANE_BENCH_DATA_DIR) + "/" + s.file, cv::IMREAD_UNCHANGED);
+    if (m.empty() || m.type() != CV_16UC1) continue;
+    depth_frame f{m.cols, m.rows, s.k, s.scale, {}};
+    f.depth.assign(m.ptr<std::uint16_t>(0), m.ptr<std::uint16_t>(0) + m.total());
+    frames.emplace_back(std::string("sample/") + s.name, std::move(f));
+  }
+#endif
+  for (const auto& [name, f] : frames) {
+    benchmark::RegisterBenchmark(("ratio/" + name + "/cpu").c_str(), ratio, f, both)
+        ->UseManualTime()->Unit(benchmark::kMillisecond)->MinTime(1.0);
+    benchmark::RegisterBenchmark(("ratio/" + name + "/cpu_serial").c_str(), ratio, f, one)
+        ->UseManualTime()->Unit(benchmark::kMillisecond)->MinTime(1.0);
+  }
+}
+}  // namespace
+
+int main(int argc, char** argv) {
+  register_all();
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}
