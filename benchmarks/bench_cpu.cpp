@@ -15,6 +15,7 @@
 #include <cmath>
 #include <vector>
 
+#include "bench_counters.hpp"
 #include "bench_frames.hpp"
 #include "bench_stages.hpp"
 #include "edgeplane/edgeplane.hpp"
@@ -34,13 +35,7 @@ const stage_data& stages_at(int w, int h) {
   return cache.back();
 }
 
-void per_pixel_counters(benchmark::State& st, int w, int h) {
-  const double px = static_cast<double>(w) * h;
-  st.counters["pixels_per_second"] = benchmark::Counter(px, benchmark::Counter::kIsIterationInvariantRate);
-  // seconds per pixel (printed with an SI prefix: 102n = 102 ns); the cost growth across sizes
-  st.counters["time_per_pixel"] =
-      benchmark::Counter(px, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
-}
+using edgeplane::bench::per_pixel_counters;
 
 #define EDGEPLANE_STAGE_BENCH(name, ...)                                        \
   void name(benchmark::State& st) {                                              \
@@ -174,12 +169,15 @@ void pipeline(benchmark::State& st, const char* preset_name) {
   segmenter<cpu> seg(preset(preset_name));
   std::vector<std::uint16_t> labels(f.mm.size());
   segmentation_result res;
+  edgeplane::bench::stage_sums stages;
   for (auto _ : st) {
     seg.segment(make_view(f.mm.data(), w, h), 0.001f, f.r.k, make_view(labels.data(), w, h), res);
     benchmark::DoNotOptimize(labels.data());
+    stages.add(res.times);
   }
   per_pixel_counters(st, w, h);
   st.counters["planes"] = static_cast<double>(res.planes.size());
+  stages.report(st);  // the mean of each stage (ms), from the segmenter's own stage_times
 }
 
 // ---- throughput over a sequence ---------------------------------------------------------------------

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "edgeplane/edgeplane.cuh"
+#include "bench_counters.hpp"
 #include "bench_frames.hpp"
 
 namespace {
@@ -52,32 +53,18 @@ void pipeline(benchmark::State& st, const char* preset_name) {
   const auto depth = ep::make_view(f.mm.data(), w, h);
   const auto out = ep::make_view(labels.data(), w, h);
   seg.segment(depth, 0.001f, f.r.k, out, res);  // warm-up
-  ep::stage_times sum{};
+  ep::bench::stage_sums stages;
   for (auto _ : st) {
     const auto t0 = std::chrono::steady_clock::now();
     seg.segment(depth, 0.001f, f.r.k, out, res);
     const auto t1 = std::chrono::steady_clock::now();
     st.SetIterationTime(std::chrono::duration<double>(t1 - t0).count());
     benchmark::DoNotOptimize(labels.data());
-    sum.preprocess += res.times.preprocess;
-    sum.edges += res.times.edges;
-    sum.segments += res.times.segments;
-    sum.candidates += res.times.candidates;
-    sum.validation += res.times.validation;
-    sum.merge += res.times.merge;
-    sum.finalize += res.times.finalize;
+    stages.add(res.times);
   }
-  const double n = st.iterations() > 0 ? static_cast<double>(st.iterations()) : 1.0;
-  st.counters["pixels_per_second"] =
-      benchmark::Counter(static_cast<double>(w) * h, benchmark::Counter::kIsIterationInvariantRate);
+  ep::bench::per_pixel_counters(st, w, h);
   st.counters["planes"] = static_cast<double>(res.planes.size());
-  st.counters["ms_preprocess"] = sum.preprocess / n;
-  st.counters["ms_edges"] = sum.edges / n;
-  st.counters["ms_segments"] = sum.segments / n;
-  st.counters["ms_candidates"] = sum.candidates / n;
-  st.counters["ms_validation"] = sum.validation / n;
-  st.counters["ms_merge"] = sum.merge / n;
-  st.counters["ms_finalize"] = sum.finalize / n;
+  stages.report(st);
 }
 
 /// The fused edge pass (four directions, all edge types) on device-resident depth, timed with CUDA
@@ -106,8 +93,7 @@ void edges_fused(benchmark::State& st) {
     ep::detail::cuda_check(cudaEventElapsedTime(&ms, t.start, t.stop), "cudaEventElapsedTime");
     st.SetIterationTime(ms / 1000.0);
   }
-  st.counters["pixels_per_second"] =
-      benchmark::Counter(static_cast<double>(w) * h, benchmark::Counter::kIsIterationInvariantRate);
+  ep::bench::per_pixel_counters(st, w, h);
 }
 
 #define EDGEPLANE_SIZES Args({256, 212})->Args({512, 424})->Args({640, 480})

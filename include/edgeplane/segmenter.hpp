@@ -363,10 +363,13 @@ class segmenter {
       if (!any) break;
       failed_.resize(host_failed_.size());
       b_.copy_from_host(failed_.data(), host_failed_.data(), host_failed_.size());
-      const detail::eroded_failed_active eroded{cand, failed_.data(), round * p_.split_erode};
+      // the failed candidates eroded (detail::eroded_failed_active, computed separably into the
+      // free coverage buffer), then split by the union-find
+      erode_failed(b_, image_view<const std::int32_t>(cand), failed_.data(), round * p_.split_erode, cov_l);
+      const detail::mask_bit_active eroded{cov_l_.data(), 2};
       connected_components(b_, n, eroded, n,
-                           detail::grid4_adjacency<detail::eroded_failed_active>{z, eroded, p_.t_je, p_.t_je_quad,
-                                                                                 slope_inv_f},
+                           detail::grid4_adjacency<detail::mask_bit_active>{z, eroded, p_.t_je, p_.t_je_quad,
+                                                                            slope_inv_f},
                            parent_.data());
       const std::int32_t added = number_components(n, num_cand, true);
       if (added == 0) break;

@@ -45,6 +45,26 @@ EDGEPLANE_HD EDGEPLANE_INLINE float dist2_to_line(point3 p, point3 a, point3 b) 
   return dot(c, c) / l2;
 }
 
+/// sqrtf(dist2_to_line(p, a, b)) > t * norm(b - a) + noise, evaluated with exactly the float
+/// operations of that expression whenever the answer is in doubt, but answering "no" without a
+/// square root or a division when it is clearly no: with l2 = |b - a|^2 and num = |(p - a) x (b - a)|^2
+/// (the shared values), num < l2 (t^2 l2 + noise^2) (1 - 1e-4) implies the distance is below
+/// t |b - a| + noise by a relative margin of 5e-5, far beyond the few float roundings of either side,
+/// so the exact expression is false too.  The guards keep every quantity of the shortcut in the
+/// normal float range (t, noise >= 0; l2 >= 1e-12 m^2; t^2 l2 + noise^2 >= 1e-20 m^2; num < 1e30):
+/// outside them the exact expression decides.  Most pixels lie on surfaces and stop here.
+EDGEPLANE_HD EDGEPLANE_INLINE bool farther_than(point3 p, point3 a, point3 b, float t, float noise) {
+  const point3 ab = b - a, ap = p - a;
+  const float l2 = dot(ab, ab);
+  const point3 c = cross(ap, ab);
+  const float num = dot(c, c);
+  const float floor2 = t * t * l2 + noise * noise;
+  if (t >= 0.f && noise >= 0.f && l2 >= 1e-12f && floor2 >= 1e-20f && num < 1e30f && num < l2 * floor2 * 0.9999f)
+    return false;
+  const float d2 = l2 <= 0.f ? dot(ap, ap) : num / l2;  // = dist2_to_line(p, a, b), the same operations
+  return sqrtf(d2) > t * sqrtf(l2) + noise;            // sqrtf(l2) = norm(b - a), the same operations
+}
+
 EDGEPLANE_HD EDGEPLANE_INLINE bool valid_depth(float z) { return z > 0.f; }
 
 /// |n . p + d| for plane l of a table holding nx, ny, nz, d per plane (metres).

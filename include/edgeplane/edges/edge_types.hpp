@@ -78,10 +78,7 @@ struct corner {
     const float noise = noise_k * sigma(nb.zc);
     // The cheap test first (one distance): on flat surfaces c lies on the chord and we stop here.
     const int h = n / 2 > 0 ? n / 2 : 1;
-    const detail::point3 a = nb.left(h), b = nb.right(h);
-    const float chord = detail::norm(b - a);
-    const float sag = sqrtf(detail::dist2_to_line(nb.center(), a, b));
-    if (!(sag > t_bend * chord + noise)) return false;
+    if (!detail::farther_than(nb.center(), nb.left(h), nb.right(h), t_bend, noise)) return false;
     float dev, len;
     detail::arm_deviation(nb, -1, n, dev, len);
     if (dev > t_arm * len + noise) return false;
@@ -103,10 +100,10 @@ struct curved {
   EDGEPLANE_HD int reach() const { return n; }
   EDGEPLANE_HD EDGEPLANE_INLINE bool arc_like(const detail::neighbourhood& nb, int s, float noise) const {
     const detail::point3 c = nb.center(), e = nb.side(s, n);
-    const float chord = detail::norm(e - c);
     const int q1 = n / 4 > 0 ? n / 4 : 1, mid = n / 2 > 0 ? n / 2 : 1, q3 = (3 * n) / 4;
-    const float dm = sqrtf(detail::dist2_to_line(nb.side(s, mid), c, e));
-    if (!(dm > t_bend * chord + noise)) return false;
+    const detail::point3 pm = nb.side(s, mid);
+    if (!detail::farther_than(pm, c, e, t_bend, noise)) return false;
+    const float dm = sqrtf(detail::dist2_to_line(pm, c, e));
     const float d1 = sqrtf(detail::dist2_to_line(nb.side(s, q1), c, e));
     const float d3 = sqrtf(detail::dist2_to_line(nb.side(s, q3), c, e));
     return d1 >= 0.6f * dm && d3 >= 0.6f * dm;

@@ -121,6 +121,52 @@ struct eroded_failed_active {
   }
 };
 
+/// Separable form of eroded_failed_active (the same set, in O(1) per pixel for any r), written as
+/// bit 1 of a byte mask; bit 0 is scratch.  Rows (one work item per row): bit 0 where the
+/// horizontal window [x - r, x + r] lies inside the image and holds one candidate value.
+struct eroded_rows_kernel {
+  image_view<const std::int32_t> cand;
+  image_view<std::uint8_t> mask;
+  int r;
+  EDGEPLANE_HD void operator()(std::int64_t row) const {
+    const int y = static_cast<int>(row);
+    int run = 0;  // equal values ending at x
+    for (int x = 0; x < cand.width; ++x) {
+      run = (x > 0 && cand(x, y) == cand(x - 1, y)) ? run + 1 : 1;
+      mask(x, y) = 0;
+      if (run >= 2 * r + 1) mask(x - r, y) = 1;
+    }
+  }
+};
+/// Columns (one work item per column): bit 1 on the pixels of failed candidates whose 2r + 1
+/// rows of windows are all uniform with the same value, i.e. whose (2r+1)^2 window is one candidate.
+struct eroded_columns_kernel {
+  image_view<const std::int32_t> cand;
+  const std::uint8_t* failed;
+  image_view<std::uint8_t> mask;
+  int r;
+  EDGEPLANE_HD void operator()(std::int64_t col) const {
+    const int x = static_cast<int>(col);
+    int run = 0;  // uniform row windows of one value ending at y
+    for (int y = 0; y < cand.height; ++y) {
+      if (mask(x, y) & 1)
+        run = (run > 0 && cand(x, y) == cand(x, y - 1)) ? run + 1 : 1;
+      else
+        run = 0;
+      if (run >= 2 * r + 1) {
+        const std::int32_t c = cand(x, y - r);
+        if (c > 0 && failed[c]) mask(x, y - r) = static_cast<std::uint8_t>(mask(x, y - r) | 2);
+      }
+    }
+  }
+};
+/// Active where a byte mask has the given bit.
+struct mask_bit_active {
+  const std::uint8_t* mask;
+  std::uint8_t bit;
+  EDGEPLANE_HD bool operator()(std::int64_t i) const { return (mask[i] & bit) != 0; }
+};
+
 /// Every element active.
 struct all_active {
   EDGEPLANE_HD bool operator()(std::int64_t) const { return true; }
@@ -168,6 +214,18 @@ struct pair_list_adjacency {
 };
 
 }  // namespace detail
+
+/// Marks (bit 1 of `mask`, a byte image of cand's size in the backend's memory) the pixels that
+/// detail::eroded_failed_active(cand, failed, r) names: pixels of failed candidates whose whole
+/// (2r+1)^2 window lies in the same candidate.  Two passes, O(1) per pixel for any r.
+/// Asynchronous on device backends.
+template <class Backend>
+void erode_failed(const Backend& b, image_view<const std::int32_t> cand, const std::uint8_t* failed, int r,
+                  image_view<std::uint8_t> mask) {
+  detail::check_same_size(cand, mask, "candidates", "mask");
+  b.for_each_index(cand.height, detail::eroded_rows_kernel{cand, mask, r});
+  b.for_each_index(cand.width, detail::eroded_columns_kernel{cand, failed, mask, r});
+}
 
 /// Connected components with the lock-free union-find: `parent` (n elements, backend memory) ends
 /// with each active element's root, the smallest element of its component, and -1 for inactive
