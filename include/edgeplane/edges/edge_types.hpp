@@ -79,11 +79,7 @@ struct corner {
     // The cheap test first (one distance): on flat surfaces c lies on the chord and we stop here.
     const int h = n / 2 > 0 ? n / 2 : 1;
     if (!detail::farther_than(nb.center(), nb.left(h), nb.right(h), t_bend, noise)) return false;
-    float dev, len;
-    detail::arm_deviation(nb, -1, n, dev, len);
-    if (dev > t_arm * len + noise) return false;
-    detail::arm_deviation(nb, +1, n, dev, len);
-    return !(dev > t_arm * len + noise);
+    return detail::arm_within(nb, -1, n, t_arm, noise) && detail::arm_within(nb, +1, n, t_arm, noise);
   }
 };
 
@@ -109,9 +105,7 @@ struct curved {
     return d1 >= 0.6f * dm && d3 >= 0.6f * dm;
   }
   EDGEPLANE_HD EDGEPLANE_INLINE bool straight(const detail::neighbourhood& nb, int s, float noise) const {
-    float dev, len;
-    detail::arm_deviation(nb, s, n, dev, len);
-    return dev <= t_straight * len + noise;
+    return detail::arm_within(nb, s, n, t_straight, noise);
   }
   // Exactly one arm straight and the other arc-like: at most one side can be the bent one, so test
   // each side's cheap arc shape (3 distances) first and scan the arms only where it holds.

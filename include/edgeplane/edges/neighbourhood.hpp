@@ -67,17 +67,16 @@ EDGEPLANE_HD EDGEPLANE_INLINE void gather_along(neighbourhood& nb, image_view<co
   gather(nb, depth, reach, interior);
 }
 
-/// Largest distance of the arm's inner points 1..m-1 on side s from the chord c -> P_m, and the
-/// chord's length.
-EDGEPLANE_HD EDGEPLANE_INLINE void arm_deviation(const neighbourhood& nb, int s, int m, float& max_dev, float& chord) {
+/// Whether the arm's inner points 1..m-1 on side s all lie within t * chord + noise of the chord
+/// c -> P_m: the same decision as comparing their largest distance with that bound (sqrtf is
+/// monotonic, so the largest distance exceeds it exactly when one point's does), but the scan stops
+/// at the first point beyond it.
+EDGEPLANE_HD EDGEPLANE_INLINE bool arm_within(const neighbourhood& nb, int s, int m, float t, float noise) {
   const point3 c = nb.center(), e = nb.side(s, m);
-  float worst = 0.f;
-  for (int k = 1; k < m; ++k) {
-    const float d2 = dist2_to_line(nb.side(s, k), c, e);
-    worst = d2 > worst ? d2 : worst;
-  }
-  max_dev = sqrtf(worst);
-  chord = norm(e - c);
+  const float bound = t * norm(e - c) + noise;
+  for (int k = 1; k < m; ++k)
+    if (sqrtf(dist2_to_line(nb.side(s, k), c, e)) > bound) return false;
+  return true;
 }
 
 }  // namespace edgeplane::detail
