@@ -158,13 +158,16 @@ inline params kinect2() {
   // tuned on the kinect2 development scenes (coordinate descent, each change kept only if neither
   // half of the set got worse on correct detections + 10 x D2MC): small planes need short runs,
   // small candidates and tighter lines (session 2: t_size 300 -> 100, t_length 8 -> 5,
-  // t_line 0.03 -> 0.02, n_cue 8 -> 5, t_ps 0.08 -> 0.05, t_cu 0.0325 -> 0.045)
+  // t_line 0.03 -> 0.02, n_cue 8 -> 5, t_ps 0.08 -> 0.05, t_cu 0.0325 -> 0.045, then
+  // t_coe 0.066 -> 0.04, t_cue1 0.04 -> 0.02)
   p.t_length = 5;
   p.t_line = 0.02f;
   p.t_size = 100;
   p.n_cue = 5;
   p.t_ps = 0.05f;
   p.t_cu = 0.045f;
+  p.t_coe = 0.04f;   // a second round: sharper creases and straighter arcs mark edges (fewer noise segments)
+  p.t_cue1 = 0.02f;
   return p;
 }
 
@@ -176,7 +179,9 @@ inline params kinect1() {
   p.t_je = 0.03f;
   p.t_je_quad = 0.02f;
   // tuned on the kinect1 development scenes, each change kept only if neither half got worse
-  // (n_cue 5 and t_cu 0.045 as in kinect2)
+  // (n_cue 5 and t_cu 0.045 as in kinect2; kinect2's sharper t_coe and t_cue1 hurt here)
+  p.t_coe = 0.066f;
+  p.t_cue1 = 0.04f;
   p.split_rounds = 1;
   p.t_size = 300;
   p.t_length = 7;
