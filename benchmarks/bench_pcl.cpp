@@ -19,10 +19,6 @@
 #include <string>
 #include <vector>
 
-#include <pcl/features/integral_image_normal.h>
-#include <pcl/point_cloud.h>
-#include <pcl/point_types.h>
-#include <pcl/segmentation/organized_multi_plane_segmentation.h>
 
 #ifdef EDGEPLANE_BENCH_WITH_OPENCV
 #include <opencv2/imgcodecs.hpp>
@@ -30,6 +26,7 @@
 
 #include "bench_frames.hpp"
 #include "edgeplane/edgeplane.hpp"
+#include "pcl_peer.hpp"
 
 namespace {
 namespace ep = edgeplane;
@@ -41,49 +38,7 @@ struct depth_frame {
   std::vector<std::uint16_t> depth;
 };
 
-/// PCL's organized multi-plane segmentation of one uint16 frame; returns the number of planes.
-class pcl_segmenter {
- public:
-  pcl_segmenter() {
-    ne_.setNormalEstimationMethod(ne_.AVERAGE_3D_GRADIENT);
-    ne_.setMaxDepthChangeFactor(0.02f);
-    ne_.setNormalSmoothingSize(10.0f);
-    mps_.setMinInliers(1000);
-    mps_.setAngularThreshold(3.0 * M_PI / 180.0);
-    mps_.setDistanceThreshold(0.02);
-  }
-  std::size_t run(const depth_frame& f) {
-    cloud_->width = static_cast<std::uint32_t>(f.w);
-    cloud_->height = static_cast<std::uint32_t>(f.h);
-    cloud_->is_dense = false;
-    cloud_->points.resize(static_cast<std::size_t>(f.w) * f.h);
-    const float nan = std::numeric_limits<float>::quiet_NaN();
-    for (int v = 0; v < f.h; ++v)
-      for (int u = 0; u < f.w; ++u) {
-        const std::size_t i = static_cast<std::size_t>(v) * f.w + u;
-        const float z = f.depth[i] * f.scale;
-        pcl::PointXYZ& p = cloud_->points[i];
-        if (z > 0.f)
-          p = pcl::PointXYZ((u - f.k.cx) * z / f.k.fx, (v - f.k.cy) * z / f.k.fy, z);
-        else
-          p = pcl::PointXYZ(nan, nan, nan);
-      }
-    ne_.setInputCloud(cloud_);
-    ne_.compute(*normals_);
-    mps_.setInputNormals(normals_);
-    mps_.setInputCloud(cloud_);
-    regions_.clear();
-    mps_.segmentAndRefine(regions_);
-    return regions_.size();
-  }
-
- private:
-  pcl::PointCloud<pcl::PointXYZ>::Ptr cloud_{new pcl::PointCloud<pcl::PointXYZ>};
-  pcl::PointCloud<pcl::Normal>::Ptr normals_{new pcl::PointCloud<pcl::Normal>};
-  pcl::IntegralImageNormalEstimation<pcl::PointXYZ, pcl::Normal> ne_;
-  pcl::OrganizedMultiPlaneSegmentation<pcl::PointXYZ, pcl::Normal, pcl::Label> mps_;
-  std::vector<pcl::PlanarRegion<pcl::PointXYZ>, Eigen::aligned_allocator<pcl::PlanarRegion<pcl::PointXYZ>>> regions_;
-};
+using edgeplane_peer::pcl_segmenter;
 
 depth_frame room(int w, int h) {
   const auto& f = ep::bench::scene_at(w, h);
@@ -102,13 +57,13 @@ void ratio(benchmark::State& st, depth_frame f, ep::cpu backend) {
   ep::segmentation_result res;
   const auto depth = ep::make_view(static_cast<const std::uint16_t*>(f.depth.data()), f.w, f.h);
   const auto out = ep::make_view(labels.data(), f.w, f.h);
-  std::size_t pcl_planes = pcl_seg.run(f);  // warm-up of both
+  std::size_t pcl_planes = pcl_seg.run(f.depth.data(), f.w, f.h, f.w, f.scale, f.k);  // warm-up of both
   seg.segment(depth, f.scale, f.k, out, res);
   std::vector<double> t_pcl, t_ep;
   using clock = std::chrono::steady_clock;
   for (auto _ : st) {
     const auto t0 = clock::now();
-    pcl_planes = pcl_seg.run(f);
+    pcl_planes = pcl_seg.run(f.depth.data(), f.w, f.h, f.w, f.scale, f.k);
     const auto t1 = clock::now();
     seg.segment(depth, f.scale, f.k, out, res);
     const auto t2 = clock::now();

@@ -38,6 +38,11 @@
 #include <vector>
 
 #include "example_io.hpp"
+#ifdef EDGEPLANE_WITH_PCL
+#include <chrono>
+
+#include "pcl_peer.hpp"  // benchmarks/: the PCL peer (edgeplane_evaluate_pcl, built when PCL is found)
+#endif
 
 namespace {
 
@@ -177,6 +182,9 @@ std::vector<std::string> compiled_backends() {
   std::vector<std::string> b{"cpu"};
 #ifdef EDGEPLANE_WITH_CUDA
   b.push_back("cuda");
+#endif
+#ifdef EDGEPLANE_WITH_PCL
+  b.push_back("pcl");  // the peer, PCL's organized multi-plane segmentation (presets do not apply)
 #endif
   return b;
 }
@@ -714,10 +722,10 @@ std::string json_summary(const options& o, const dataset& ds, const totals& t) {
   return s;
 }
 
-template <class Backend>
-int run_backend(const options& o, const edgeplane::params& params, const dataset& ds, Backend backend) {
-  edgeplane::segmenter<Backend> seg(params, backend);
-  edgeplane::segmentation_result result;
+/// Runs `segment_frame(depth, scale, k, labels, planes)` (which labels a CV_16UC1 image, fills the
+/// segments' plane equations and returns its milliseconds) over the data set and prints the scores.
+template <class SegmentFrame>
+int run_with(const options& o, const dataset& ds, SegmentFrame&& segment_frame) {
   if (!o.save_dir.empty()) {
     std::error_code ec;
     fs::create_directories(o.save_dir, ec);
@@ -759,23 +767,18 @@ int run_backend(const options& o, const edgeplane::params& params, const dataset
     }
 
     cv::Mat labels(depth.rows, depth.cols, CV_16UC1);
-    seg.segment(const_view<std::uint16_t>(depth), scale, k,
-                edgeplane::make_view(labels.ptr<std::uint16_t>(), labels.cols, labels.rows,
-                                     static_cast<std::ptrdiff_t>(labels.step1())),
-                result);
     pred_planes.clear();
-    for (const edgeplane::plane& p : result.planes)
-      pred_planes.push_back({p.id, {p.normal[0], p.normal[1], p.normal[2]}, p.d});
+    const double ms = segment_frame(depth, scale, k, labels, pred_planes);
     if (!o.save_dir.empty()) ex::write_png((fs::path(o.save_dir) / (f.name + "_labels.png")).string(), labels);
 
     const em::report r = em::evaluate(const_view<std::uint16_t>(labels), const_view<std::uint16_t>(in.gt),
                                       const_view<std::uint8_t>(in.scored), pred_planes, gt_planes);
-    t.add(r, result.times.total);
+    t.add(r, ms);
     if (!o.quiet) {
       const em::segcomp_counts& s = r.segcomp;
       print_row(f.name, s.gt_planes, s.segments, s.correct, s.over, s.under, s.missed, s.noise, s.mean_angle_deg,
                 r.d2mc, r.ssim, r.planes.precision, r.planes.recall, r.planes.mean_iou, r.planes.mean_angle_deg,
-                result.times.total, false);
+                ms, false);
       std::fflush(stdout);
     }
   }
@@ -797,6 +800,39 @@ int run_backend(const options& o, const edgeplane::params& params, const dataset
   return 0;
 }
 
+template <class Backend>
+int run_backend(const options& o, const edgeplane::params& params, const dataset& ds, Backend backend) {
+  edgeplane::segmenter<Backend> seg(params, backend);
+  edgeplane::segmentation_result result;
+  return run_with(o, ds, [&](const cv::Mat& depth, float scale, const edgeplane::intrinsics& k, cv::Mat& labels,
+                             std::vector<em::plane_equation>& planes) {
+    seg.segment(const_view<std::uint16_t>(depth), scale, k,
+                edgeplane::make_view(labels.ptr<std::uint16_t>(), labels.cols, labels.rows,
+                                     static_cast<std::ptrdiff_t>(labels.step1())),
+                result);
+    for (const edgeplane::plane& p : result.planes) planes.push_back({p.id, {p.normal[0], p.normal[1], p.normal[2]}, p.d});
+    return result.times.total;
+  });
+}
+
+#ifdef EDGEPLANE_WITH_PCL
+/// The peer: PCL's OrganizedMultiPlaneSegmentation with IntegralImageNormalEstimation, in the
+/// configuration of PCL's organized segmentation demo (see benchmarks/bench_pcl.cpp).  Plane j of
+/// its result labels its inlier pixels j + 1; its model coefficients give the plane equation.
+int run_pcl(const options& o, const dataset& ds) {
+  edgeplane_peer::pcl_segmenter pcl_seg;
+  return run_with(o, ds, [&](const cv::Mat& depth, float scale, const edgeplane::intrinsics& k, cv::Mat& labels,
+                             std::vector<em::plane_equation>& planes) {
+    const auto t0 = std::chrono::steady_clock::now();
+    std::vector<edgeplane_peer::pcl_plane> found;
+    pcl_seg.run(depth.ptr<std::uint16_t>(), depth.cols, depth.rows, static_cast<std::ptrdiff_t>(depth.step1()), scale,
+                k, labels.ptr<std::uint16_t>(), static_cast<std::ptrdiff_t>(labels.step1()), &found);
+    for (const auto& p : found) planes.push_back({p.id, {p.n[0], p.n[1], p.n[2]}, p.d});
+    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  });
+}
+#endif
+
 int run(const options& o) {
   const edgeplane::params params = make_params(o);
   if (o.list_params) {
@@ -805,6 +841,9 @@ int run(const options& o) {
   }
   const dataset ds = scan_dataset(o);
   if (o.backend == "cpu") return run_backend(o, params, ds, edgeplane::cpu{});
+#ifdef EDGEPLANE_WITH_PCL
+  if (o.backend == "pcl") return run_pcl(o, ds);
+#endif
 #ifdef EDGEPLANE_WITH_CUDA
   if (o.backend == "cuda") return run_backend(o, params, ds, edgeplane::cuda{});
 #endif
