@@ -8,8 +8,6 @@
 
 namespace edgeplane::detail {
 
-inline constexpr int max_arm = 32;  ///< longest neighbour array per side
-
 /// The two opposite neighbour arrays of pixel (x, y) along (dx, dy), read in place from the depth
 /// image: side arrays end at the image border or at the first invalid pixel, and hold at most
 /// `reach` neighbours (nl, nr).  Neighbour k (k = 1 is the nearest) is read only when k <= nl
