@@ -77,6 +77,7 @@ const std::vector<param_field>& param_fields() {
       EDGEPLANE_PARAM(max_run_splits), EDGEPLANE_PARAM(t_size), EDGEPLANE_PARAM(t_cu), EDGEPLANE_PARAM(t_residual),
       EDGEPLANE_PARAM(split_rounds), EDGEPLANE_PARAM(split_erode), EDGEPLANE_PARAM(t_par), EDGEPLANE_PARAM(t_ps),
       EDGEPLANE_PARAM(grow_iterations), EDGEPLANE_PARAM(grow_sweeps), EDGEPLANE_PARAM(grow_k), EDGEPLANE_PARAM(label_closing_radius),
+      EDGEPLANE_PARAM(split_regions), EDGEPLANE_PARAM(min_region_pixels),
   };
   return fields;
 }
@@ -96,7 +97,7 @@ consteval std::size_t aggregate_fields() {
   else
     return sizeof...(A);
 }
-static_assert(aggregate_fields<edgeplane::params>() == 39 && aggregate_fields<edgeplane::noise_model>() == 2,
+static_assert(aggregate_fields<edgeplane::params>() == 41 && aggregate_fields<edgeplane::noise_model>() == 2,
               "edgeplane::params changed: add its new fields to param_fields() in edgeplane_evaluate.cpp (so that "
               "--set reaches every field) and update the counts here");
 

@@ -165,7 +165,7 @@ class segmenter {
            cov_r_.capacity_bytes() + parent_.capacity_bytes() + count_.capacity_bytes() + flags_.capacity_bytes() +
            scan_.capacity_bytes() + cand_.capacity_bytes() + failed_.capacity_bytes() + moments_.capacity_bytes() + bbox_.capacity_bytes() + table_.capacity_bytes() +
            planes_.capacity_bytes() + tol_.capacity_bytes() + flag_.capacity_bytes() + lab_a_.capacity_bytes() + lab_b_.capacity_bytes() + lab_c_.capacity_bytes() +
-           lab_full_.capacity_bytes();
+           lab_full_.capacity_bytes() + origin_.capacity_bytes();
   }
 
  private:
@@ -201,6 +201,7 @@ class segmenter {
     lab_b_.set_backend(b_);
     lab_c_.set_backend(b_);
     lab_full_.set_backend(b_);
+    origin_.set_backend(b_);
   }
 
   using clock = std::chrono::steady_clock;
@@ -227,14 +228,20 @@ class segmenter {
   // raster order of their roots and writes the ids into cand_ (only over pixels that took part
   // when `only_members`, else everywhere: 0 for pixels of no kept component).  Returns how many.
   std::int32_t number_components(std::int64_t n, std::int32_t offset, bool only_members) {
+    const std::int32_t k = flag_components(n, p_.t_size);
+    b_.for_each_index(n, detail::write_candidates_kernel{parent_.data(), flags_.data(), scan_.data(), offset,
+                                                         only_members, cand_.data()});
+    return k;
+  }
+  // Flags (flags_) the roots of union-find components of at least min_size elements and numbers
+  // them 1, 2, ... in raster order of their roots (scan_); returns how many.
+  std::int32_t flag_components(std::int64_t n, std::int32_t min_size) {
     b_.memset(count_.data(), 0, sizeof(std::int32_t) * n);
     b_.for_each_index(n, detail::count_roots_kernel{parent_.data(), count_.data()});
-    b_.for_each_index(n, detail::flag_candidates_kernel{parent_.data(), count_.data(), p_.t_size, flags_.data()});
+    b_.for_each_index(n, detail::flag_candidates_kernel{parent_.data(), count_.data(), min_size, flags_.data()});
     b_.inclusive_scan(flags_.data(), n, scan_.data());
     std::int32_t k = 0;  // the scan's last element is the number of components kept
     b_.copy_to_host(&k, scan_.data() + (n - 1), sizeof(std::int32_t));
-    b_.for_each_index(n, detail::write_candidates_kernel{parent_.data(), flags_.data(), scan_.data(), offset,
-                                                         only_members, cand_.data()});
     return k;
   }
 
@@ -479,6 +486,26 @@ class segmenter {
       b_.for_each_index(n, detail::label_erode_kernel{la, lb, lc, p_.label_closing_radius});
       std::swap(la, lc);
     }
+    // Disconnected regions of one plane (a floor seen on both sides of a table, coplanar box
+    // faces) become planes of their own, each with its plane's equation; regions smaller than
+    // min_region_pixels are dropped.
+    region_origin_.clear();
+    if (p_.split_regions && num_planes > 0) {
+      const std::uint16_t* lbl = la.data;
+      connected_components(b_, n, detail::nonzero_label_active{lbl}, n,
+                           detail::same_label_adjacency{image_view<const std::uint16_t>(la)}, parent_.data());
+      const std::int32_t min_px = p_.min_region_pixels > 0 ? p_.min_region_pixels : p_.t_size;
+      const std::int32_t regions = std::min<std::int32_t>(flag_components(n, min_px), 65535);
+      origin_.resize(static_cast<std::size_t>(regions) + 1);
+      b_.memset(origin_.data(), 0, sizeof(std::uint16_t) * (static_cast<std::size_t>(regions) + 1));
+      b_.for_each_index(n, detail::region_origin_kernel{parent_.data(), flags_.data(), scan_.data(), lbl, regions,
+                                                        origin_.data()});
+      b_.for_each_index(n, detail::region_relabel_kernel{parent_.data(), flags_.data(), scan_.data(), regions, lb.data});
+      std::swap(la, lb);
+      region_origin_.resize(static_cast<std::size_t>(regions) + 1);
+      b_.copy_to_host(region_origin_.data(), origin_.data(), region_origin_.size() * sizeof(std::uint16_t));
+      num_planes = regions;
+    }
     image_view<std::uint16_t> final_labels = la;
     if (down) {
       lab_full_.resize(n_full);
@@ -495,7 +522,7 @@ class segmenter {
       // The plane equation and eigenvalues come from the validated candidates (before growth and
       // closing, whose rim pixels would bias the fit); extent, centroid and counts from the labels.
       const plane_fit& f = fits_[g - 1];
-      const plane_fit& c = group_fits_[g - 1];
+      const plane_fit& c = group_fits_[region_origin_.empty() ? g - 1 : region_origin_[g] - 1];
       plane pl;
       pl.id = static_cast<std::uint16_t>(g);
       for (int j = 0; j < 3; ++j) {
@@ -538,7 +565,7 @@ class segmenter {
   buffer<std::uint16_t, Backend> table_;
   buffer<float, Backend> planes_, tol_;
   buffer<std::int32_t, Backend> flag_;
-  buffer<std::uint16_t, Backend> lab_a_, lab_b_, lab_c_, lab_full_;
+  buffer<std::uint16_t, Backend> lab_a_, lab_b_, lab_c_, lab_full_, origin_;
   // host scratch, reused across frames
   std::vector<std::uint64_t> host_moments_, group_moments_;
   std::vector<std::int32_t> host_bbox_;
@@ -546,7 +573,7 @@ class segmenter {
   std::vector<char> keep_, status_;
   std::vector<int> group_, merge_parent_;
   std::vector<std::uint8_t> host_failed_;
-  std::vector<std::uint16_t> host_table_;
+  std::vector<std::uint16_t> host_table_, region_origin_;
   std::vector<float> host_planes_, host_tol_;
 };
 

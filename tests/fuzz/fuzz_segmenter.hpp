@@ -85,8 +85,8 @@ inline void override_field(edgeplane::params& p, unsigned field, std::uint32_t r
                      &p.grow_k};
   int* ints[] = {&p.depth_closing_radius, &p.smooth_radius, &p.n_ee, &p.n_coe, &p.n_cue,
                  &p.edge_closing_radius, &p.t_length, &p.max_run_splits, &p.t_size, &p.split_rounds,
-                 &p.split_erode, &p.grow_iterations, &p.label_closing_radius};
-  bool* bools[] = {&p.downscale, &p.use_jump, &p.use_extrema, &p.use_corner, &p.use_curved, &p.grow_sweeps};
+                 &p.split_erode, &p.grow_iterations, &p.label_closing_radius, &p.min_region_pixels};
+  bool* bools[] = {&p.downscale, &p.use_jump, &p.use_extrema, &p.use_corner, &p.use_curved, &p.grow_sweeps, &p.split_regions};
   constexpr unsigned nf = sizeof floats / sizeof *floats, ni = sizeof ints / sizeof *ints,
                      nb = sizeof bools / sizeof *bools;
   field %= nf + ni + nb;

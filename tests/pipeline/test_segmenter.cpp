@@ -131,6 +131,90 @@ TEST_CASE("segmenter: a cylinder does not become a plane") {
   CHECK(check_known_planes(s, pose, r, o, 5000) >= 2);  // the floor and the wall are still found
 }
 
+namespace {
+/// Whether every nonzero label of a w x h image forms one 4-connected region.
+bool every_label_connected(const std::vector<std::uint16_t>& labels, int w, int h) {
+  std::vector<char> seen(labels.size(), 0);
+  std::map<int, int> regions;
+  std::vector<int> stack;
+  for (int i = 0; i < w * h; ++i) {
+    if (!labels[i] || seen[i]) continue;
+    ++regions[labels[i]];
+    stack.assign(1, i);
+    seen[i] = 1;
+    while (!stack.empty()) {
+      const int j = stack.back();
+      stack.pop_back();
+      const int x = j % w, y = j / w;
+      const int nb[4][2] = {{x - 1, y}, {x + 1, y}, {x, y - 1}, {x, y + 1}};
+      for (const auto& q : nb) {
+        if (q[0] < 0 || q[1] < 0 || q[0] >= w || q[1] >= h) continue;
+        const int k = q[1] * w + q[0];
+        if (!seen[k] && labels[k] == labels[j]) {
+          seen[k] = 1;
+          stack.push_back(k);
+        }
+      }
+    }
+  }
+  for (const auto& [l, n] : regions)
+    if (n != 1) return false;
+  return true;
+}
+}  // namespace
+
+// A pillar in front of a wall splits the wall's image into a left and a right part: by default
+// (the thesis's coplanar merging) they are one plane; with split_regions each part is a plane of
+// its own with the wall's equation, and every label is one connected region.
+TEST_CASE("segmenter: split_regions gives each disconnected part of a plane its own id") {
+  test::scene s;
+  s.planes.push_back({Eigen::Vector3d(0, 0, 1), 0.0, 1});
+  s.planes.push_back({Eigen::Vector3d(1, 0, 0), -3.5, 2});
+  s.boxes.push_back({Eigen::Vector3d(2.0, -0.2, 0.0), Eigen::Vector3d(2.3, 0.2, 6.0), 10});
+  const auto pose = test::look_at({0.0, 0.0, 1.2}, {3.5, 0.0, 1.0});
+  const rendered r = test::render(s, pose, 256, 212, test::kinect2_intrinsics(256, 212), {0.001, 0.0005, 0.0, 13});
+  const auto truth = test::plane_in_camera(s, pose, 2);
+  auto wall_labels = [&](const run_output& o) {
+    std::map<int, int> px;  // label -> wall pixels
+    int wall = 0;
+    for (std::size_t i = 0; i < r.gt.size(); ++i)
+      if (r.gt[i] == 2 && r.depth[i] > 0.f) {
+        ++wall;
+        if (o.labels[i]) px[o.labels[i]]++;
+      }
+    std::map<int, double> share;
+    for (const auto& [l, n] : px)
+      if (n >= 0.2 * wall) share[l] = static_cast<double>(n) / wall;
+    return share;
+  };
+  params p = presets::thesis_half();
+  p.downscale = false;
+  const run_output merged = segment_float(r, p);
+  const auto m = wall_labels(merged);
+  REQUIRE(m.size() == 1);
+  CHECK(m.begin()->second > 0.9);
+  CHECK_FALSE(every_label_connected(merged.labels, r.width, r.height));
+
+  p.split_regions = true;
+  const run_output split = segment_float(r, p);
+  const auto sp = wall_labels(split);
+  REQUIRE(sp.size() == 2);
+  double total = 0;
+  for (const auto& [l, share] : sp) {
+    total += share;
+    const plane* pl = find_plane(split.result, l);
+    REQUIRE(pl != nullptr);
+    CHECK(angle_deg(pl->normal, truth) < 2.0);
+    CHECK(std::abs(pl->d - truth[3]) < 0.01);
+  }
+  CHECK(total > 0.9);
+  CHECK(every_label_connected(split.labels, r.width, r.height));
+  CHECK(split.result.planes.size() == merged.result.planes.size() + 1);
+  // pixel counts stay consistent with the relabelled image
+  for (const auto& pl : split.result.planes)
+    CHECK(pl.pixels == std::count(split.labels.begin(), split.labels.end(), pl.id));
+}
+
 TEST_CASE("segmenter: a fronto-parallel wall is one plane facing the camera") {
   rendered r;
   r.width = 160;

@@ -7,6 +7,7 @@
 #include "edgeplane/config.hpp"
 #include "edgeplane/detail/geometry.hpp"
 #include "edgeplane/image.hpp"
+#include "edgeplane/labels/union_find.hpp"
 
 namespace edgeplane::detail {
 
@@ -152,6 +153,45 @@ struct label_erode_kernel {
           break;
         }
     out(x, y) = v;
+  }
+};
+
+/// Splitting planes into connected regions: pixels with a nonzero label take part.
+struct nonzero_label_active {
+  const std::uint16_t* labels;  // dense (pitch = width)
+  EDGEPLANE_HD bool operator()(std::int64_t i) const { return labels[i] != 0; }
+};
+/// 4-connectivity between pixels of the same nonzero label (a dense label image).
+struct same_label_adjacency {
+  image_view<const std::uint16_t> labels;
+  EDGEPLANE_HD int operator()(std::int64_t i, std::int32_t* a, std::int32_t* b) const {
+    const std::uint16_t l = labels.data[i];
+    if (l == 0) return 0;
+    return grid4_pairs(i, labels.width, labels.height, a, b, [&](std::int64_t j) { return labels.data[j] == l; });
+  }
+};
+/// For the root of every kept region (flags[root] = 1): origin[scan[root]] = its plane's label.
+struct region_origin_kernel {
+  const std::int32_t* parent;
+  const std::int32_t* flags;
+  const std::int32_t* scan;
+  const std::uint16_t* labels;
+  std::int32_t max_regions;
+  std::uint16_t* origin;
+  EDGEPLANE_HD void operator()(std::int64_t i) const {
+    if (parent[i] == static_cast<std::int32_t>(i) && flags[i] && scan[i] <= max_regions) origin[scan[i]] = labels[i];
+  }
+};
+/// out[i] = the 1-based region id of i's region when kept (and at most max_regions), else 0.
+struct region_relabel_kernel {
+  const std::int32_t* parent;
+  const std::int32_t* flags;
+  const std::int32_t* scan;
+  std::int32_t max_regions;
+  std::uint16_t* out;
+  EDGEPLANE_HD void operator()(std::int64_t i) const {
+    const std::int32_t r = parent[i];
+    out[i] = (r >= 0 && flags[r] && scan[r] <= max_regions) ? static_cast<std::uint16_t>(scan[r]) : std::uint16_t(0);
   }
 };
 

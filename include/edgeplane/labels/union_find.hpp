@@ -172,6 +172,24 @@ struct all_active {
   EDGEPLANE_HD bool operator()(std::int64_t) const { return true; }
 };
 
+/// The union pairs of pixel i of a dense w x h image with its right and lower neighbours j for
+/// which joins(j) holds (at most 2); returns how many.
+template <class Joins>
+EDGEPLANE_HD EDGEPLANE_INLINE int grid4_pairs(std::int64_t i, int w, int h, std::int32_t* a, std::int32_t* b,
+                                              Joins joins) {
+  const int x = static_cast<int>(i % w), y = static_cast<int>(i / w);
+  int n = 0;
+  if (x + 1 < w && joins(i + 1)) {
+    a[n] = static_cast<std::int32_t>(i);
+    b[n++] = static_cast<std::int32_t>(i + 1);
+  }
+  if (y + 1 < h && joins(i + w)) {
+    a[n] = static_cast<std::int32_t>(i);
+    b[n++] = static_cast<std::int32_t>(i + w);
+  }
+  return n;
+}
+
 /// 4-connectivity on an image: pixel i is joined to its right and lower neighbours when both are
 /// active and their depths differ by no more than t_je + t_je_quad z^2 + slope * z * inv_f (the
 /// last term: `slope` pixel footprints, which admits surfaces seen at grazing angles), so a gap in
@@ -187,18 +205,9 @@ struct grid4_adjacency {
   }
   EDGEPLANE_HD int operator()(std::int64_t i, std::int32_t* a, std::int32_t* b) const {
     if (!active(i)) return 0;
-    const int w = depth.width, x = static_cast<int>(i % w), y = static_cast<int>(i / w);
-    const float z = depth(x, y);
-    int n = 0;
-    if (x + 1 < w && active(i + 1) && compatible(z, depth(x + 1, y))) {
-      a[n] = static_cast<std::int32_t>(i);
-      b[n++] = static_cast<std::int32_t>(i + 1);
-    }
-    if (y + 1 < depth.height && active(i + w) && compatible(z, depth(x, y + 1))) {
-      a[n] = static_cast<std::int32_t>(i);
-      b[n++] = static_cast<std::int32_t>(i + w);
-    }
-    return n;
+    const float z = depth.data[i];  // dense image
+    return grid4_pairs(i, depth.width, depth.height, a, b,
+                       [&](std::int64_t j) { return active(j) && compatible(z, depth.data[j]); });
   }
 };
 
