@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 #include <vector>
 
@@ -204,4 +205,32 @@ TEST_CASE_TEMPLATE("smooth_depth: reduces noise on a plane and keeps a depth ste
     for (int y = 0; y < h; ++y)
       CHECK(out[static_cast<std::size_t>(y) * w + step_x] - out[static_cast<std::size_t>(y) * w + step_x - 1] > 0.28f);
   }
+}
+
+// The host backends smooth runs of 16 pixels at once (detail::smooth_rows_kernel); the device
+// backend runs detail::smooth_kernel per pixel.  Both must give the same floats, bit for bit, at
+// borders, around invalid pixels and for widths that are not multiples of 16.
+TEST_CASE("smooth_depth: the 16-pixel row kernel equals the per-pixel kernel bit for bit") {
+  lcg_noise noise(11);
+  for (const int w : {1, 5, 16, 17, 40, 67})
+    for (const int h : {1, 3, 9})
+      for (const int r : {1, 2, 3}) {
+        CAPTURE(w);
+        CAPTURE(h);
+        CAPTURE(r);
+        std::vector<float> in(static_cast<std::size_t>(w) * h);
+        for (std::size_t i = 0; i < in.size(); ++i) {
+          const float u = noise(1.f);  // uniform in [-1, 1]
+          in[i] = u > 0.8f ? 0.f : 1.5f + 0.002f * static_cast<float>(i % 7) + 0.01f * u;  // holes, steps, noise
+        }
+        std::vector<float> a(in.size(), -1.f), c(in.size(), -2.f);
+        const detail::smooth_kernel px{make_view<const float>(in.data(), w, h), make_view(a.data(), w, h), r, 2.5f,
+                                       0.0015f, 0.0015f};
+        for (std::int64_t i = 0; i < static_cast<std::int64_t>(in.size()); ++i) px(i);
+        smooth_depth(cpu{}, make_view<const float>(in.data(), w, h), make_view(c.data(), w, h), r, 2.5f, 0.0015f,
+                     0.0015f);
+        int differ = 0;
+        for (std::size_t i = 0; i < in.size(); ++i) differ += std::memcmp(&a[i], &c[i], sizeof(float)) != 0;
+        CHECK(differ == 0);
+      }
 }
