@@ -25,3 +25,10 @@
 #else
 #define EDGEPLANE_ASSERT(x) ((void)0)
 #endif
+
+namespace edgeplane::detail {
+/// Pixels per work item of the row kernels (smoothing, edges): runs of 16 on host backends (SIMD
+/// lanes and independent chains for a core), 1 on device backends (a thread per pixel).
+template <class Backend>
+inline constexpr int row_lanes = Backend::host_accessible ? 16 : 1;
+}  // namespace edgeplane::detail

@@ -184,3 +184,48 @@ TEST_CASE_TEMPLATE("close_edges: an edge line ending at the image border is kept
   const auto m = mask.host();
   for (std::size_t i = 0; i < m.size(); ++i) CHECK(m[i] == (edges[i] != 0 ? 1 : 0));
 }
+
+// On host backends detect_edges runs detail::all_edges_rows_kernel (cheap first conditions for 16
+// pixels at once, the scalar kernel wherever one of them may fire); the device backend runs
+// detail::all_edges_kernel per pixel.  The edge maps must be equal byte for byte, for every preset's
+// thresholds, on a scene large enough that most runs take the 16-pixel path.
+TEST_CASE("detect_edges: the 16-pixel row kernel gives the per-pixel kernel's edge map") {
+  const int w = 203, h = 157;  // not a multiple of 16
+  const intrinsics k{180.f, 180.f, 101.f, 78.f};
+  std::vector<float> z(static_cast<std::size_t>(w) * h);
+  lcg_noise noise(5);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      double v = plane_depth(k, x, y, normalized({0.1, -0.2, -1.0}), 1.8);
+      if (x >= 140) v += 0.3;                                                       // step
+      if (y >= 90 && x < 140) v += 0.004 * std::abs(x + y - 150);                   // crease
+      if (y < 40 && x >= 30 && x < 110) v += 0.05 * std::sqrt(std::max(0, x - 30) / 80.0);  // bend
+      if ((x - 60) * (x - 60) + (y - 60) * (y - 60) < 200) v -= 0.02;               // a disc in front
+      z[static_cast<std::size_t>(y) * w + x] = static_cast<float>(v) + noise(0.002f);
+    }
+  for (int y = 100; y < 108; ++y)
+    for (int x = 170; x < 180; ++x) z[static_cast<std::size_t>(y) * w + x] = 0.f;  // hole
+  const auto zv = make_view<const float>(z.data(), w, h);
+  for (const auto& name : presets::preset_names()) {
+    CAPTURE(name);
+    const params p = preset(name);
+    std::vector<std::uint8_t> rows(z.size(), 0xee), pixels(z.size(), 0xdd);
+    detect_edges(cpu{}, zv, k, p, make_view(rows.data(), w, h));
+    const detail::edge_set set = detail::make_edge_set(p);
+    const int reach = set.reach();
+    const auto ev = make_view(pixels.data(), w, h);
+    const cpu serial{cpu::mode::serial};
+    serial.for_each_index(h, detail::interior_rows_kernel{zv, ev, reach});
+    serial.for_each_index(w, detail::interior_columns_kernel{ev, reach});
+    serial.for_each_index(static_cast<std::int64_t>(w) * h,
+                          detail::all_edges_kernel{zv, ev, detail::make_projector(k), set, reach});
+    int differ = 0, edges = 0;
+    for (std::size_t i = 0; i < z.size(); ++i) {
+      differ += rows[i] != pixels[i];
+      edges += pixels[i] != 0 && pixels[i] != edge_invalid;
+    }
+    CHECK(differ == 0);
+    CHECK(edges > 100);                 // the scene has edges of several kinds...
+    CHECK(edges < static_cast<int>(z.size()) / 3);  // ...and mostly surface
+  }
+}

@@ -133,6 +133,121 @@ struct all_edges_kernel {
   }
 };
 
+/// all_edges_kernel over runs of Lanes pixels of one row (work item = row * chunks + chunk), for
+/// host backends.  Most pixels lie on surfaces, where every test stops at its first, cheap
+/// condition.  Those first conditions are evaluated here for all lanes at once, with exactly the
+/// float operations of the scalar tests (so g++ can vectorize them and the decisions are the
+/// same): the jump test, the nearest-neighbour extrema condition, the corner's bend pre-test at c
+/// and the curved arc pre-test of both sides (detail::farther_than's sure rejection), in all
+/// four directions.  A lane where every one of them rejects gets no edge bits, as the scalar
+/// kernel would give it; every other pixel (a possible edge, a pixel near invalid depth or the
+/// border) runs all_edges_kernel itself.  So the edge map is identical bit for bit.
+template <int Lanes>
+struct all_edges_rows_kernel {
+  all_edges_kernel px;
+  int chunks;  // runs per row: ceil(width / Lanes)
+
+  // farther_than(p, a, b, t, noise) is surely false (its shortcut), for lane-wise points.
+  EDGEPLANE_HD EDGEPLANE_INLINE static bool surely_not_farther(point3 p, point3 a, point3 b, float t, float noise) {
+    const point3 ab = b - a, ap = p - a;
+    const float l2 = dot(ab, ab);
+    const point3 c = cross(ap, ab);
+    const float num = dot(c, c);
+    const float floor2 = t * t * l2 + noise * noise;
+    return (t >= 0.f) & (noise >= 0.f) & (l2 >= 1e-12f) & (floor2 >= 1e-20f) & (num < 1e30f) &
+           (num < l2 * floor2 * 0.9999f);
+  }
+
+  // neighbour k (signed: k < 0 on the left side) of the lane-l pixel x, back-projected as
+  // neighbourhood does
+  template <class Direction>
+  EDGEPLANE_HD EDGEPLANE_INLINE static point3 at(projector pr, const float* c, std::ptrdiff_t step, int x, int y,
+                                                 int l, int k) {
+    return pr(x + k * Direction::dx, y + k * Direction::dy, c[l + k * step]);
+  }
+
+  template <class Direction>
+  EDGEPLANE_HD EDGEPLANE_INLINE void maybe_along(const float* c, int x0, int y, std::ptrdiff_t pitch,
+                                                 const float* zc, const float* noise_co, const float* noise_cu,
+                                                 int* maybe) const {
+    constexpr int dx = Direction::dx, dy = Direction::dy;
+    const std::ptrdiff_t step = static_cast<std::ptrdiff_t>(dy) * pitch + dx;
+    const edge_set& s = px.set;
+    const projector pr = px.proj;
+    if (s.use_jump) {
+      const edge_type::jump& j = s.jump;
+      for (int l = 0; l < Lanes; ++l) {
+        const float z = zc[l];
+        const float t = j.t_abs + j.t_quad * z * z;
+        const float dl = fabsf(c[l - step] - z), dr = fabsf(c[l + step] - z);  // >= 0: (d > 0 ? d : 0) == d
+        maybe[l] |= static_cast<int>((dl > t + j.t_ratio * dr) | (dr > t + j.t_ratio * dl));
+      }
+    }
+    if (s.use_extrema) {
+      const float t = s.extrema.t;
+      for (int l = 0; l < Lanes; ++l) {
+        const float z = zc[l], a = c[l - step], b = c[l + step];
+        const bool nearer = (z < t * a) & (z < t * b), farther = (z * t > a) & (z * t > b);
+        maybe[l] |= static_cast<int>(nearer | farther);
+      }
+    }
+    if (s.use_corner) {
+      const int n = s.corner.n, h = n / 2 > 0 ? n / 2 : 1;
+      const float t = s.corner.t_bend;
+      for (int l = 0; l < Lanes; ++l)
+        maybe[l] |= static_cast<int>(!surely_not_farther(at<Direction>(pr, c, step, x0 + l, y, l, 0),
+                                                         at<Direction>(pr, c, step, x0 + l, y, l, -h),
+                                                         at<Direction>(pr, c, step, x0 + l, y, l, h), t,
+                                                         noise_co[l]));
+    }
+    if (s.use_curved) {
+      const int n = s.curved.n, mid = n / 2 > 0 ? n / 2 : 1;
+      const float t = s.curved.t_bend;
+      for (int l = 0; l < Lanes; ++l) {
+        const int x = x0 + l;
+        const point3 p = at<Direction>(pr, c, step, x, y, l, 0);
+        const point3 ml = at<Direction>(pr, c, step, x, y, l, -mid), el = at<Direction>(pr, c, step, x, y, l, -n);
+        const point3 mr = at<Direction>(pr, c, step, x, y, l, mid), er = at<Direction>(pr, c, step, x, y, l, n);
+        const bool no_l = surely_not_farther(ml, p, el, t, noise_cu[l]);
+        const bool no_r = surely_not_farther(mr, p, er, t, noise_cu[l]);
+        maybe[l] |= static_cast<int>(!(no_l & no_r));
+      }
+    }
+  }
+
+  EDGEPLANE_HD void operator()(std::int64_t item) const {
+    const int y = static_cast<int>(item / chunks), x0 = static_cast<int>(item % chunks) * Lanes;
+    const int w = px.depth.width, r = px.reach;
+    const std::int64_t row0 = static_cast<std::int64_t>(y) * w;
+    if (x0 < r || x0 + Lanes > w - r || y < r || y >= px.depth.height - r) {  // windows may leave the image
+      const int x1 = x0 + Lanes < w ? x0 + Lanes : w;
+      for (int x = x0; x < x1; ++x) px(row0 + x);
+      return;
+    }
+    const float* c = &px.depth(x0, y);
+    float zc[Lanes], noise_co[Lanes], noise_cu[Lanes];
+    int maybe[Lanes];
+    for (int l = 0; l < Lanes; ++l) {
+      zc[l] = c[l];
+      noise_co[l] = px.set.corner.noise_k * px.set.corner.sigma(zc[l]);
+      noise_cu[l] = px.set.curved.noise_k * px.set.curved.sigma(zc[l]);
+      maybe[l] = 0;
+    }
+    const std::ptrdiff_t pitch = px.depth.pitch;
+    maybe_along<direction::horizontal>(c, x0, y, pitch, zc, noise_co, noise_cu, maybe);
+    maybe_along<direction::vertical>(c, x0, y, pitch, zc, noise_co, noise_cu, maybe);
+    maybe_along<direction::left_diagonal>(c, x0, y, pitch, zc, noise_co, noise_cu, maybe);
+    maybe_along<direction::right_diagonal>(c, x0, y, pitch, zc, noise_co, noise_cu, maybe);
+    std::uint8_t* e = &px.edges(x0, y);
+    for (int l = 0; l < Lanes; ++l) {
+      if (maybe[l] || !(e[l] & interior_flag))
+        px(row0 + x0 + l);
+      else
+        e[l] = 0;
+    }
+  }
+};
+
 /// Binary dilation of "any bit set" over a (2r+1)^2 window.
 struct mask_dilate_kernel {
   image_view<const std::uint8_t> in;
@@ -209,7 +324,14 @@ void detect_edges(const Backend& b, image_view<const float> depth, const intrins
   const int reach = set.reach();
   b.for_each_index(depth.height, detail::interior_rows_kernel{depth, edges, reach});
   b.for_each_index(depth.width, detail::interior_columns_kernel{edges, reach});
-  b.for_each_index(depth.pixels(), detail::all_edges_kernel{depth, edges, detail::make_projector(k), set, reach});
+  const detail::all_edges_kernel px{depth, edges, detail::make_projector(k), set, reach};
+  constexpr int lanes = detail::row_lanes<Backend>;
+  if constexpr (lanes == 1) {
+    b.for_each_index(depth.pixels(), px);
+  } else {
+    const int chunks = (depth.width + lanes - 1) / lanes;
+    b.for_each_index(static_cast<std::int64_t>(chunks) * depth.height, detail::all_edges_rows_kernel<lanes>{px, chunks});
+  }
 }
 
 /// Closing (dilate, then erode) of the edge map with a (2r+1)^2 window: `mask` becomes 1 on edge

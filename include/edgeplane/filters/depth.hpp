@@ -188,11 +188,6 @@ struct smooth_rows_kernel {
   }
 };
 
-/// Pixels per work item of the row kernels: runs of 16 on host backends (SIMD lanes and
-/// independent chains for a core), 1 on device backends (a thread per pixel).
-template <class Backend>
-inline constexpr int row_lanes = Backend::host_accessible ? 16 : 1;
-
 }  // namespace detail
 
 /// Edge-preserving smoothing (see detail::smooth_kernel) of `in` into `out` (same size, distinct).
