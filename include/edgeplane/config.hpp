@@ -1,5 +1,6 @@
 // edgeplane: configuration macros shared by every header.
 #pragma once
+#include <cstdint>
 
 #if defined(__CUDACC__)
 #define EDGEPLANE_HD __host__ __device__
@@ -31,4 +32,18 @@ namespace edgeplane::detail {
 /// lanes and independent chains for a core), 1 on device backends (a thread per pixel).
 template <class Backend>
 inline constexpr int row_lanes = Backend::host_accessible ? 16 : 1;
+
+/// Runs a per-pixel kernel over a w x h image: on device backends one work item per pixel; on host
+/// backends RowKernel<row_lanes>{px, chunks}, one work item per run of row_lanes pixels of a row
+/// (chunks = runs per row), which must compute what px computes.
+template <template <int> class RowKernel, class Backend, class Pixel>
+void for_each_pixel_run(const Backend& b, int w, int h, const Pixel& px) {
+  constexpr int lanes = row_lanes<Backend>;
+  if constexpr (lanes == 1) {
+    b.for_each_index(static_cast<std::int64_t>(w) * h, px);
+  } else {
+    const int chunks = (w + lanes - 1) / lanes;
+    b.for_each_index(static_cast<std::int64_t>(chunks) * h, RowKernel<lanes>{px, chunks});
+  }
+}
 }  // namespace edgeplane::detail

@@ -203,7 +203,6 @@ inline params abw() {
   params p;
   p.noise = {0.001f, 0.0f};
   p.noise_k = 0.75f;
-  p.t_je = 0.01f;
   p.t_length = 8;
   p.n_cue = 6;
   // tuned on the ABW development images (coordinate descent, each change kept only if neither

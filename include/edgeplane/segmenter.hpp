@@ -498,9 +498,8 @@ class segmenter {
       const std::int32_t regions = std::min<std::int32_t>(flag_components(n, min_px), 65535);
       origin_.resize(static_cast<std::size_t>(regions) + 1);
       b_.memset(origin_.data(), 0, sizeof(std::uint16_t) * (static_cast<std::size_t>(regions) + 1));
-      b_.for_each_index(n, detail::region_origin_kernel{parent_.data(), flags_.data(), scan_.data(), lbl, regions,
-                                                        origin_.data()});
-      b_.for_each_index(n, detail::region_relabel_kernel{parent_.data(), flags_.data(), scan_.data(), regions, lb.data});
+      b_.for_each_index(n, detail::region_relabel_kernel{parent_.data(), flags_.data(), scan_.data(), lbl, regions,
+                                                         lb.data, origin_.data()});
       std::swap(la, lb);
       region_origin_.resize(static_cast<std::size_t>(regions) + 1);
       b_.copy_to_host(region_origin_.data(), origin_.data(), region_origin_.size() * sizeof(std::uint16_t));

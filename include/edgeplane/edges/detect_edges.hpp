@@ -324,14 +324,8 @@ void detect_edges(const Backend& b, image_view<const float> depth, const intrins
   const int reach = set.reach();
   b.for_each_index(depth.height, detail::interior_rows_kernel{depth, edges, reach});
   b.for_each_index(depth.width, detail::interior_columns_kernel{edges, reach});
-  const detail::all_edges_kernel px{depth, edges, detail::make_projector(k), set, reach};
-  constexpr int lanes = detail::row_lanes<Backend>;
-  if constexpr (lanes == 1) {
-    b.for_each_index(depth.pixels(), px);
-  } else {
-    const int chunks = (depth.width + lanes - 1) / lanes;
-    b.for_each_index(static_cast<std::int64_t>(chunks) * depth.height, detail::all_edges_rows_kernel<lanes>{px, chunks});
-  }
+  detail::for_each_pixel_run<detail::all_edges_rows_kernel>(
+      b, depth.width, depth.height, detail::all_edges_kernel{depth, edges, detail::make_projector(k), set, reach});
 }
 
 /// Closing (dilate, then erode) of the edge map with a (2r+1)^2 window: `mask` becomes 1 on edge

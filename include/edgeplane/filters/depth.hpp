@@ -195,14 +195,8 @@ template <class Backend>
 void smooth_depth(const Backend& b, image_view<const float> in, image_view<float> out, int r, float k,
                   float sigma0, float sigma2) {
   detail::check_same_size(in, out, "depth", "smoothed depth");
-  const detail::smooth_kernel px{in, out, r, k, sigma0, sigma2};
-  constexpr int lanes = detail::row_lanes<Backend>;
-  if constexpr (lanes == 1) {
-    b.for_each_index(in.pixels(), px);
-  } else {
-    const int chunks = (in.width + lanes - 1) / lanes;
-    b.for_each_index(static_cast<std::int64_t>(chunks) * in.height, detail::smooth_rows_kernel<lanes>{px, chunks});
-  }
+  detail::for_each_pixel_run<detail::smooth_rows_kernel>(b, in.width, in.height,
+                                                         detail::smooth_kernel{in, out, r, k, sigma0, sigma2});
 }
 
 /// Converts raw uint16 depth (scale = metres per unit) or float metres (scale 1) into a working

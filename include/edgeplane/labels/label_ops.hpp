@@ -170,28 +170,21 @@ struct same_label_adjacency {
     return grid4_pairs(i, labels.width, labels.height, a, b, [&](std::int64_t j) { return labels.data[j] == l; });
   }
 };
-/// For the root of every kept region (flags[root] = 1): origin[scan[root]] = its plane's label.
-struct region_origin_kernel {
+/// out[i] = the 1-based region id of i's region when kept (flags[root] = 1) and at most
+/// max_regions, else 0; the region's root also records its plane's label: origin[id] = labels[i].
+struct region_relabel_kernel {
   const std::int32_t* parent;
   const std::int32_t* flags;
   const std::int32_t* scan;
   const std::uint16_t* labels;
   std::int32_t max_regions;
+  std::uint16_t* out;
   std::uint16_t* origin;
   EDGEPLANE_HD void operator()(std::int64_t i) const {
-    if (parent[i] == static_cast<std::int32_t>(i) && flags[i] && scan[i] <= max_regions) origin[scan[i]] = labels[i];
-  }
-};
-/// out[i] = the 1-based region id of i's region when kept (and at most max_regions), else 0.
-struct region_relabel_kernel {
-  const std::int32_t* parent;
-  const std::int32_t* flags;
-  const std::int32_t* scan;
-  std::int32_t max_regions;
-  std::uint16_t* out;
-  EDGEPLANE_HD void operator()(std::int64_t i) const {
     const std::int32_t r = parent[i];
-    out[i] = (r >= 0 && flags[r] && scan[r] <= max_regions) ? static_cast<std::uint16_t>(scan[r]) : std::uint16_t(0);
+    const bool kept = r >= 0 && flags[r] && scan[r] <= max_regions;
+    out[i] = kept ? static_cast<std::uint16_t>(scan[r]) : std::uint16_t(0);
+    if (kept && r == static_cast<std::int32_t>(i)) origin[scan[r]] = labels[i];
   }
 };
 
