@@ -33,14 +33,47 @@ namespace edgeplane::detail {
 template <class Backend>
 inline constexpr int row_lanes = Backend::host_accessible ? 16 : 1;
 
-/// Runs a per-pixel kernel over a w x h image: on device backends one work item per pixel; on host
-/// backends RowKernel<row_lanes>{px, chunks}, one work item per run of row_lanes pixels of a row
-/// (chunks = runs per row), which must compute what px computes.
+/// f(x, y) for every pixel of row `row`: host backends' work item of for_each_pixel.
+template <class F>
+struct pixel_rows {
+  F f;
+  int w;
+  EDGEPLANE_HD void operator()(std::int64_t row) const {
+    const int y = static_cast<int>(row);
+    for (int x = 0; x < w; ++x) f(x, y);
+  }
+};
+/// f(x, y) for pixel i of a w-wide image: device backends' work item of for_each_pixel.
+template <class F>
+struct pixel_flat {
+  F f;
+  int w;
+  EDGEPLANE_HD void operator()(std::int64_t i) const {
+    const int j = static_cast<int>(i);  // images hold fewer than 2^31 pixels (the segmenter checks)
+    f(j % w, j / w);
+  }
+};
+
+/// Calls f(x, y) for every pixel of a w x h image, in any order and concurrently.  Host backends
+/// run one work item per row with the x loop inside (no division per pixel, and the loop is open
+/// to the compiler's vectorizer); device backends run a thread per pixel.
+template <class Backend, class F>
+void for_each_pixel(const Backend& b, int w, int h, const F& f) {
+  if (w <= 0 || h <= 0) return;
+  if constexpr (Backend::host_accessible)
+    b.for_each_index(h, pixel_rows<F>{f, w});
+  else
+    b.for_each_index(static_cast<std::int64_t>(w) * h, pixel_flat<F>{f, w});
+}
+
+/// Runs a per-pixel kernel px(x, y) over a w x h image: on device backends one work item per pixel;
+/// on host backends RowKernel<row_lanes>{px, chunks}, one work item per run of row_lanes pixels of
+/// a row (chunks = runs per row), which must compute what px computes.
 template <template <int> class RowKernel, class Backend, class Pixel>
 void for_each_pixel_run(const Backend& b, int w, int h, const Pixel& px) {
   constexpr int lanes = row_lanes<Backend>;
   if constexpr (lanes == 1) {
-    b.for_each_index(static_cast<std::int64_t>(w) * h, px);
+    for_each_pixel(b, w, h, px);
   } else {
     const int chunks = (w + lanes - 1) / lanes;
     b.for_each_index(static_cast<std::int64_t>(chunks) * h, RowKernel<lanes>{px, chunks});

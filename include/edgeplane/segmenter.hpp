@@ -447,8 +447,9 @@ class segmenter {
     lab_a_.resize(n);
     lab_b_.resize(n);
     auto la = view(lab_a_.data(), pw_, ph_), lb = view(lab_b_.data(), pw_, ph_);
-    b_.for_each_index(n, detail::relabel_kernel<detail::candidate_image_labels>{
-                             detail::candidate_image_labels{cand}, table_.data(), la});
+    detail::for_each_pixel(b_, pw_, ph_,
+                           detail::relabel_kernel<detail::candidate_image_labels>{
+                               detail::candidate_image_labels{cand}, table_.data(), la});
     const detail::projector proj = detail::make_projector(kp);
     const detail::noise_sigma sigma = detail::make_noise(p_.noise);
     // Growth stops early once a round assigns nothing (the flag is read every 4 rounds, so a device
@@ -468,8 +469,8 @@ class segmenter {
       }
     } else {
       for (int it = 0; it < p_.grow_iterations && num_planes > 0; ++it) {
-        b_.for_each_index(n, detail::grow_kernel{z, la, lb, proj, sigma, p_.grow_k, planes_.data(), tol_.data(),
-                                                 flag_.data()});
+        detail::for_each_pixel(b_, pw_, ph_, detail::grow_kernel{z, la, lb, proj, sigma, p_.grow_k, planes_.data(),
+                                                                 tol_.data(), flag_.data()});
         std::swap(la, lb);
         if (it % 4 == 3) {
           std::int32_t changed = 0;
@@ -480,10 +481,10 @@ class segmenter {
       }
     }
     if (p_.label_closing_radius > 0 && num_planes > 0) {
-      b_.for_each_index(n, detail::label_dilate_kernel{la, lb, p_.label_closing_radius});
+      detail::for_each_pixel(b_, pw_, ph_, detail::label_dilate_kernel{la, lb, p_.label_closing_radius});
       lab_c_.resize(n);
       auto lc = view(lab_c_.data(), pw_, ph_);
-      b_.for_each_index(n, detail::label_erode_kernel{la, lb, lc, p_.label_closing_radius});
+      detail::for_each_pixel(b_, pw_, ph_, detail::label_erode_kernel{la, lb, lc, p_.label_closing_radius});
       std::swap(la, lc);
     }
     // Disconnected regions of one plane (a floor seen on both sides of a table, coplanar box
@@ -509,7 +510,7 @@ class segmenter {
     if (down) {
       lab_full_.resize(n_full);
       final_labels = view(lab_full_.data(), w, h);
-      b_.for_each_index(n_full, detail::upsample_kernel{la, final_labels});
+      detail::for_each_pixel(b_, w, h, detail::upsample_kernel{la, final_labels});
     }
     // final statistics at output resolution
     moments_.resize(static_cast<std::size_t>(num_planes + 1) * moment_slots);

@@ -217,8 +217,8 @@ TEST_CASE("detect_edges: the 16-pixel row kernel gives the per-pixel kernel's ed
     const cpu serial{cpu::mode::serial};
     serial.for_each_index(h, detail::interior_rows_kernel{zv, ev, reach});
     serial.for_each_index(w, detail::interior_columns_kernel{ev, reach});
-    serial.for_each_index(static_cast<std::int64_t>(w) * h,
-                          detail::all_edges_kernel{zv, ev, detail::make_projector(k), set, reach});
+    for (int y = 0; y < h; ++y)  // the per-pixel kernel itself, pixel by pixel
+      for (int x = 0; x < w; ++x) detail::all_edges_kernel{zv, ev, detail::make_projector(k), set, reach}(x, y);
     int differ = 0, edges = 0;
     for (std::size_t i = 0; i < z.size(); ++i) {
       differ += rows[i] != pixels[i];

@@ -226,7 +226,8 @@ TEST_CASE("smooth_depth: the 16-pixel row kernel equals the per-pixel kernel bit
         std::vector<float> a(in.size(), -1.f), c(in.size(), -2.f);
         const detail::smooth_kernel px{make_view<const float>(in.data(), w, h), make_view(a.data(), w, h), r, 2.5f,
                                        0.0015f, 0.0015f};
-        for (std::int64_t i = 0; i < static_cast<std::int64_t>(in.size()); ++i) px(i);
+        for (int y = 0; y < h; ++y)
+          for (int x = 0; x < w; ++x) px(x, y);
         smooth_depth(cpu{}, make_view<const float>(in.data(), w, h), make_view(c.data(), w, h), r, 2.5f, 0.0015f,
                      0.0015f);
         int differ = 0;

@@ -18,7 +18,8 @@ namespace {
 /// Source of candidate ids for relabel_kernel: a plain array.
 struct array_source {
   const std::uint16_t* ids;
-  std::int32_t operator()(std::int64_t i) const { return ids[i]; }
+  int w;
+  std::int32_t operator()(int x, int y) const { return ids[static_cast<std::size_t>(y) * w + x]; }
 };
 
 std::size_t at(int w, int x, int y) { return static_cast<std::size_t>(y) * w + x; }
@@ -34,7 +35,7 @@ std::vector<std::uint16_t> grow_once(const B& b, const std::vector<float>& depth
   device_array<float, B> z(b, depth), pl(b, planes), cp(b, caps);
   device_array<std::uint16_t, B> li(b, in), lo(b, in.size(), 0xBEEF);
   device_array<std::int32_t, B> flag(b, 1, 0);
-  b.for_each_index(static_cast<std::int64_t>(w) * h,
+  detail::for_each_pixel(b, w, h,
                    detail::grow_kernel{z.cview(w, h), li.cview(w, h), lo.view(w, h), detail::make_projector(camera(w, h)),
                                        detail::make_noise(p.noise), p.grow_k, pl.data(), cp.data(), flag.data()});
   if (changed) *changed = flag.host()[0];
@@ -44,9 +45,8 @@ std::vector<std::uint16_t> grow_once(const B& b, const std::vector<float>& depth
 template <class B>
 std::vector<std::uint16_t> close_labels(const B& b, const std::vector<std::uint16_t>& in, int w, int h, int r) {
   device_array<std::uint16_t, B> li(b, in), dil(b, in.size(), 0), out(b, in.size(), 0xBEEF);
-  const auto n = static_cast<std::int64_t>(w) * h;
-  b.for_each_index(n, detail::label_dilate_kernel{li.cview(w, h), dil.view(w, h), r});
-  b.for_each_index(n, detail::label_erode_kernel{li.cview(w, h), dil.cview(w, h), out.view(w, h), r});
+  detail::for_each_pixel(b, w, h, detail::label_dilate_kernel{li.cview(w, h), dil.view(w, h), r});
+  detail::for_each_pixel(b, w, h, detail::label_erode_kernel{li.cview(w, h), dil.cview(w, h), out.view(w, h), r});
   return out.host();
 }
 
@@ -59,7 +59,8 @@ TEST_CASE_TEMPLATE("relabel_kernel maps every pixel through the table", B, EDGEP
   const std::vector<std::uint16_t> table = {0, 5, 5, 2};  // candidates 1 and 2 merged, 3 renamed
   for (const B& b : variants<B>()) {
     device_array<std::uint16_t, B> src(b, ids), tab(b, table), out(b, ids.size(), 0xBEEF);
-    b.for_each_index(w * h, detail::relabel_kernel<array_source>{array_source{src.data()}, tab.data(), out.view(w, h)});
+    detail::for_each_pixel(b, w, h,
+                           detail::relabel_kernel<array_source>{array_source{src.data(), w}, tab.data(), out.view(w, h)});
     const auto o = out.host();
     for (std::size_t i = 0; i < o.size(); ++i) REQUIRE(o[i] == table[ids[i]]);
   }
@@ -196,7 +197,7 @@ TEST_CASE_TEMPLATE("upsample_kernel: nearest neighbour 2x, odd last row and colu
     for (auto [ow, oh] : {std::pair{6, 4}, std::pair{7, 5}}) {
       CAPTURE(ow);
       device_array<std::uint16_t, B> src(b, in), out(b, static_cast<std::size_t>(ow) * oh, 0xBEEF);
-      b.for_each_index(ow * oh, detail::upsample_kernel{src.cview(w, h), out.view(ow, oh)});
+      detail::for_each_pixel(b, ow, oh, detail::upsample_kernel{src.cview(w, h), out.view(ow, oh)});
       const auto o = out.host();
       for (int y = 0; y < oh; ++y)
         for (int x = 0; x < ow; ++x) {
@@ -207,7 +208,7 @@ TEST_CASE_TEMPLATE("upsample_kernel: nearest neighbour 2x, odd last row and colu
     }
     // Spot checks written out: the 2x2 block of source pixel (1, 0) and the repeated last column.
     device_array<std::uint16_t, B> src(b, in), out(b, 35, 0);
-    b.for_each_index(35, detail::upsample_kernel{src.cview(w, h), out.view(7, 5)});
+    detail::for_each_pixel(b, 7, 5, detail::upsample_kernel{src.cview(w, h), out.view(7, 5)});
     const auto o = out.host();
     CHECK(o[at(7, 2, 0)] == 2);
     CHECK(o[at(7, 3, 1)] == 2);

@@ -21,8 +21,7 @@ struct edge_kernel {
   image_view<std::uint8_t> edges;
   projector proj;
   EdgeType edge;
-  EDGEPLANE_HD void operator()(std::int64_t i) const {
-    const int x = static_cast<int>(i % depth.width), y = static_cast<int>(i / depth.width);
+  EDGEPLANE_HD void operator()(int x, int y) const {
     if (!(depth(x, y) > 0.f)) return;
     neighbourhood nb;
     gather_along<Direction>(nb, depth, proj, x, y, edge.reach());
@@ -118,8 +117,7 @@ struct all_edges_kernel {
   projector proj;
   edge_set set;
   int reach;
-  EDGEPLANE_HD void operator()(std::int64_t i) const {
-    const int x = static_cast<int>(i % depth.width), y = static_cast<int>(i / depth.width);
+  EDGEPLANE_HD void operator()(int x, int y) const {
     if (!(depth(x, y) > 0.f)) {
       edges(x, y) = edge_invalid;
       return;
@@ -218,10 +216,9 @@ struct all_edges_rows_kernel {
   EDGEPLANE_HD void operator()(std::int64_t item) const {
     const int y = static_cast<int>(item / chunks), x0 = static_cast<int>(item % chunks) * Lanes;
     const int w = px.depth.width, r = px.reach;
-    const std::int64_t row0 = static_cast<std::int64_t>(y) * w;
     if (x0 < r || x0 + Lanes > w - r || y < r || y >= px.depth.height - r) {  // windows may leave the image
       const int x1 = x0 + Lanes < w ? x0 + Lanes : w;
-      for (int x = x0; x < x1; ++x) px(row0 + x);
+      for (int x = x0; x < x1; ++x) px(x, y);
       return;
     }
     const float* c = &px.depth(x0, y);
@@ -241,7 +238,7 @@ struct all_edges_rows_kernel {
     std::uint8_t* e = &px.edges(x0, y);
     for (int l = 0; l < Lanes; ++l) {
       if (maybe[l] || !(e[l] & interior_flag))
-        px(row0 + x0 + l);
+        px(x0 + l, y);
       else
         e[l] = 0;
     }
@@ -253,8 +250,7 @@ struct mask_dilate_kernel {
   image_view<const std::uint8_t> in;
   image_view<std::uint8_t> out;
   int r;
-  EDGEPLANE_HD void operator()(std::int64_t i) const {
-    const int x = static_cast<int>(i % in.width), y = static_cast<int>(i / in.width);
+  EDGEPLANE_HD void operator()(int x, int y) const {
     std::uint8_t v = 0;
     if (x >= r && y >= r && x < in.width - r && y < in.height - r) {  // the window is inside: no checks
       for (int dy = -r; dy <= r; ++dy) {
@@ -280,8 +276,7 @@ struct mask_erode_kernel {
   image_view<const std::uint8_t> in;
   image_view<std::uint8_t> out;
   int r;
-  EDGEPLANE_HD void operator()(std::int64_t i) const {
-    const int x = static_cast<int>(i % in.width), y = static_cast<int>(i / in.width);
+  EDGEPLANE_HD void operator()(int x, int y) const {
     std::uint8_t v = 1;
     if (!in(x, y)) {  // the centre is in its own window
       out(x, y) = 0;
@@ -307,8 +302,8 @@ void detect_edge(const Backend& b, image_view<const float> depth, const intrinsi
                  image_view<std::uint8_t> edges) {
   detail::check_intrinsics(k);
   detail::check_same_size(depth, edges, "depth", "edges");
-  b.for_each_index(depth.pixels(),
-                   detail::edge_kernel<Direction, EdgeType>{depth, edges, detail::make_projector(k), edge});
+  detail::for_each_pixel(b, depth.width, depth.height,
+                         detail::edge_kernel<Direction, EdgeType>{depth, edges, detail::make_projector(k), edge});
 }
 
 /// All enabled edge types over the four directions in one pass: writes every pixel of `edges`
@@ -336,8 +331,8 @@ void close_edges(const Backend& b, image_view<const std::uint8_t> edges, image_v
                  image_view<std::uint8_t> mask, int r) {
   detail::check_same_size(edges, mask, "edges", "mask");
   detail::check_same_size(edges, scratch, "edges", "scratch");
-  b.for_each_index(edges.pixels(), detail::mask_dilate_kernel{edges, scratch, r});
-  b.for_each_index(edges.pixels(), detail::mask_erode_kernel{scratch, mask, r});
+  detail::for_each_pixel(b, edges.width, edges.height, detail::mask_dilate_kernel{edges, scratch, r});
+  detail::for_each_pixel(b, edges.width, edges.height, detail::mask_erode_kernel{scratch, mask, r});
 }
 
 }  // namespace edgeplane

@@ -18,8 +18,7 @@ struct convert_depth_kernel {
   image_view<float> out;
   float scale;  // metres per unit
   float min_depth, max_depth;
-  EDGEPLANE_HD void operator()(std::int64_t i) const {
-    const int x = static_cast<int>(i % out.width), y = static_cast<int>(i / out.width);
+  EDGEPLANE_HD void operator()(int x, int y) const {
     const float z = static_cast<float>(in(x, y)) * scale;
     out(x, y) = (z >= min_depth && z <= max_depth && z > 0.f) ? z : 0.f;  // NaN fails every comparison
   }
@@ -30,8 +29,7 @@ struct depth_dilate_kernel {
   image_view<const float> in;
   image_view<float> out;
   int r;
-  EDGEPLANE_HD void operator()(std::int64_t i) const {
-    const int x = static_cast<int>(i % in.width), y = static_cast<int>(i / in.width);
+  EDGEPLANE_HD void operator()(int x, int y) const {
     float m = in(x, y);
     if (m <= 0.f) {  // only invalid pixels need the dilation; valid ones keep their depth
       for (int dy = -r; dy <= r; ++dy)
@@ -53,8 +51,7 @@ struct depth_erode_kernel {
   image_view<const float> dilated;
   image_view<float> out;
   int r;
-  EDGEPLANE_HD void operator()(std::int64_t i) const {
-    const int x = static_cast<int>(i % out.width), y = static_cast<int>(i / out.width);
+  EDGEPLANE_HD void operator()(int x, int y) const {
     const float z = original(x, y);
     if (z > 0.f) {
       out(x, y) = z;
@@ -81,8 +78,7 @@ struct depth_erode_kernel {
 struct downscale_kernel {
   image_view<const float> in;
   image_view<float> out;
-  EDGEPLANE_HD void operator()(std::int64_t i) const {
-    const int x = static_cast<int>(i % out.width), y = static_cast<int>(i / out.width);
+  EDGEPLANE_HD void operator()(int x, int y) const {
     float v[4] = {in(2 * x, 2 * y), in(2 * x + 1, 2 * y), in(2 * x, 2 * y + 1), in(2 * x + 1, 2 * y + 1)};
     float mn = 3.4e38f;
     for (float z : v)
@@ -110,8 +106,7 @@ struct smooth_kernel {
   image_view<float> out;
   int r;
   float k, s0, s2;
-  EDGEPLANE_HD void operator()(std::int64_t i) const {
-    const int x = static_cast<int>(i % in.width), y = static_cast<int>(i / in.width);
+  EDGEPLANE_HD void operator()(int x, int y) const {
     const float zc = in(x, y);
     if (!(zc > 0.f)) {
       out(x, y) = 0.f;
@@ -158,10 +153,9 @@ struct smooth_rows_kernel {
   EDGEPLANE_HD void operator()(std::int64_t item) const {
     const int y = static_cast<int>(item / chunks), x0 = static_cast<int>(item % chunks) * Lanes;
     const int w = px.in.width, r = px.r;
-    const std::int64_t row0 = static_cast<std::int64_t>(y) * w;
     if (x0 < r || x0 + Lanes > w - r || y < r || y >= px.in.height - r) {
       const int x1 = x0 + Lanes < w ? x0 + Lanes : w;
-      for (int x = x0; x < x1; ++x) px(row0 + x);
+      for (int x = x0; x < x1; ++x) px(x, y);
       return;
     }
     float zc[Lanes], tol[Lanes], sum[Lanes], cnt[Lanes];  // counts as floats: exact, and one vector type
@@ -210,7 +204,7 @@ void convert_depth(const Backend& b, image_view<const In> in, float scale, float
   detail::check_same_size(in, out, "depth", "converted depth");
   detail::require(std::isfinite(scale) && scale > 0.f, "depth scale must be positive and finite (got " +
                                                            std::to_string(scale) + " metres per unit)");
-  b.for_each_index(in.pixels(), detail::convert_depth_kernel<In>{in, out, scale, min_depth, max_depth});
+  detail::for_each_pixel(b, in.width, in.height, detail::convert_depth_kernel<In>{in, out, scale, min_depth, max_depth});
 }
 
 /// The closing filter (dilate, then erode, square window of half-size r) restricted to invalid
@@ -220,8 +214,8 @@ template <class Backend>
 void close_depth(const Backend& b, image_view<float> depth, image_view<float> scratch, image_view<float> out, int r) {
   detail::check_same_size(depth, scratch, "depth", "scratch");
   detail::check_same_size(depth, out, "depth", "output");
-  b.for_each_index(depth.pixels(), detail::depth_dilate_kernel{depth, scratch, r});
-  b.for_each_index(depth.pixels(), detail::depth_erode_kernel{depth, scratch, out, r});
+  detail::for_each_pixel(b, depth.width, depth.height, detail::depth_dilate_kernel{depth, scratch, r});
+  detail::for_each_pixel(b, depth.width, depth.height, detail::depth_erode_kernel{depth, scratch, out, r});
 }
 
 /// 2x downscale of a working depth image into out (width/2 x height/2).
@@ -229,7 +223,7 @@ template <class Backend>
 void downscale_depth(const Backend& b, image_view<const float> in, image_view<float> out) {
   detail::require(out.width == in.width / 2 && out.height == in.height / 2,
                   "downscale output must be half the input size");
-  b.for_each_index(out.pixels(), detail::downscale_kernel{in, out});
+  detail::for_each_pixel(b, out.width, out.height, detail::downscale_kernel{in, out});
 }
 
 }  // namespace edgeplane

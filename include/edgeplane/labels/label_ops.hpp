@@ -17,9 +17,7 @@ struct relabel_kernel {
   Source source;
   const std::uint16_t* table;
   image_view<std::uint16_t> labels;
-  EDGEPLANE_HD void operator()(std::int64_t i) const {
-    labels(static_cast<int>(i % labels.width), static_cast<int>(i / labels.width)) = table[source(i)];
-  }
+  EDGEPLANE_HD void operator()(int x, int y) const { labels(x, y) = table[source(x, y)]; }
 };
 
 /// One step of plane-guided growth: an unlabelled pixel with valid depth takes the label of the
@@ -37,8 +35,7 @@ struct grow_kernel {
   const float* planes;
   const float* cap;
   std::int32_t* changed;  // set to 1 when any pixel is assigned (relaxed atomic store)
-  EDGEPLANE_HD void operator()(std::int64_t i) const {
-    const int x = static_cast<int>(i % in.width), y = static_cast<int>(i / in.width);
+  EDGEPLANE_HD void operator()(int x, int y) const {
     const std::uint16_t cur = in(x, y);
     const float z = depth(x, y);
     if (cur != 0 || !(z > 0.f)) {
@@ -116,8 +113,7 @@ struct label_dilate_kernel {
   image_view<const std::uint16_t> in;
   image_view<std::uint16_t> out;
   int r;
-  EDGEPLANE_HD void operator()(std::int64_t i) const {
-    const int x = static_cast<int>(i % in.width), y = static_cast<int>(i / in.width);
+  EDGEPLANE_HD void operator()(int x, int y) const {
     std::uint16_t v = in(x, y);
     if (v == 0) {
       for (int dy = -r; dy <= r; ++dy)
@@ -138,8 +134,7 @@ struct label_erode_kernel {
   image_view<const std::uint16_t> dilated;
   image_view<std::uint16_t> out;
   int r;
-  EDGEPLANE_HD void operator()(std::int64_t i) const {
-    const int x = static_cast<int>(i % out.width), y = static_cast<int>(i / out.width);
+  EDGEPLANE_HD void operator()(int x, int y) const {
     const std::uint16_t o = original(x, y);
     if (o != 0) {
       out(x, y) = o;
@@ -164,10 +159,13 @@ struct nonzero_label_active {
 /// 4-connectivity between pixels of the same nonzero label (a dense label image).
 struct same_label_adjacency {
   image_view<const std::uint16_t> labels;
-  EDGEPLANE_HD int operator()(std::int64_t i, std::int32_t* a, std::int32_t* b) const {
+  EDGEPLANE_HD int grid_width() const { return labels.width; }
+  EDGEPLANE_HD int grid_height() const { return labels.height; }
+  EDGEPLANE_HD int operator()(int x, int y, std::int32_t* a, std::int32_t* b) const {
+    const std::int64_t i = static_cast<std::int64_t>(y) * labels.width + x;
     const std::uint16_t l = labels.data[i];
     if (l == 0) return 0;
-    return grid4_pairs(i, labels.width, labels.height, a, b, [&](std::int64_t j) { return labels.data[j] == l; });
+    return grid4_pairs(x, y, i, labels.width, labels.height, a, b, [&](std::int64_t j) { return labels.data[j] == l; });
   }
 };
 /// out[i] = the 1-based region id of i's region when kept (flags[root] = 1) and at most
@@ -192,8 +190,7 @@ struct region_relabel_kernel {
 struct upsample_kernel {
   image_view<const std::uint16_t> in;
   image_view<std::uint16_t> out;
-  EDGEPLANE_HD void operator()(std::int64_t i) const {
-    const int x = static_cast<int>(i % out.width), y = static_cast<int>(i / out.width);
+  EDGEPLANE_HD void operator()(int x, int y) const {
     int sx = x / 2, sy = y / 2;
     sx = sx < in.width ? sx : in.width - 1;
     sy = sy < in.height ? sy : in.height - 1;

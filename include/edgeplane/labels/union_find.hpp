@@ -66,6 +66,26 @@ struct uf_init_kernel {
   }
 };
 
+/// For pixel (x, y), unites the pairs a grid adjacency policy names (at most 4).
+template <class Adjacency>
+struct uf_union_grid_kernel {
+  Adjacency adj;
+  std::int32_t* parent;
+  EDGEPLANE_HD void operator()(int x, int y) const {
+    std::int32_t a[4], b[4];
+    const int n = adj(x, y, a, b);
+    for (int k = 0; k < n; ++k) uf_unite(parent, a[k], b[k]);
+  }
+};
+
+/// Grid adjacency policies (one work item per pixel of a dense image, called as adj(x, y, a, b))
+/// say so with grid_width() and grid_height(); other policies are called as adj(i, a, b).
+template <class Adjacency>
+inline constexpr bool is_grid_adjacency = requires(const Adjacency& a) {
+  a.grid_width();
+  a.grid_height();
+};
+
 /// For work item i, unites the pairs the adjacency policy names (at most 4).
 template <class Adjacency>
 struct uf_union_kernel {
@@ -172,12 +192,11 @@ struct all_active {
   EDGEPLANE_HD bool operator()(std::int64_t) const { return true; }
 };
 
-/// The union pairs of pixel i of a dense w x h image with its right and lower neighbours j for
-/// which joins(j) holds (at most 2); returns how many.
+/// The union pairs of pixel (x, y) (flat index i) of a dense w x h image with its right and lower
+/// neighbours j for which joins(j) holds (at most 2); returns how many.
 template <class Joins>
-EDGEPLANE_HD EDGEPLANE_INLINE int grid4_pairs(std::int64_t i, int w, int h, std::int32_t* a, std::int32_t* b,
-                                              Joins joins) {
-  const int x = static_cast<int>(i % w), y = static_cast<int>(i / w);
+EDGEPLANE_HD EDGEPLANE_INLINE int grid4_pairs(int x, int y, std::int64_t i, int w, int h, std::int32_t* a,
+                                              std::int32_t* b, Joins joins) {
   int n = 0;
   if (x + 1 < w && joins(i + 1)) {
     a[n] = static_cast<std::int32_t>(i);
@@ -203,10 +222,13 @@ struct grid4_adjacency {
     const float z = za < zb ? za : zb;
     return fabsf(za - zb) <= t_je + t_je_quad * z * z + slope_inv_f * z;
   }
-  EDGEPLANE_HD int operator()(std::int64_t i, std::int32_t* a, std::int32_t* b) const {
+  EDGEPLANE_HD int grid_width() const { return depth.width; }
+  EDGEPLANE_HD int grid_height() const { return depth.height; }
+  EDGEPLANE_HD int operator()(int x, int y, std::int32_t* a, std::int32_t* b) const {
+    const std::int64_t i = static_cast<std::int64_t>(y) * depth.width + x;  // dense image
     if (!active(i)) return 0;
-    const float z = depth.data[i];  // dense image
-    return grid4_pairs(i, depth.width, depth.height, a, b,
+    const float z = depth.data[i];
+    return grid4_pairs(x, y, i, depth.width, depth.height, a, b,
                        [&](std::int64_t j) { return active(j) && compatible(z, depth.data[j]); });
   }
 };
@@ -239,13 +261,20 @@ void erode_failed(const Backend& b, image_view<const std::int32_t> cand, const s
 /// Connected components with the lock-free union-find: `parent` (n elements, backend memory) ends
 /// with each active element's root, the smallest element of its component, and -1 for inactive
 /// ones.  `work_items` is the number of adjacency work items.  Synchronous semantics between the
-/// three launches come from the backend's stream order.
+/// three launches come from the backend's stream order.  A grid adjacency (detail::is_grid_adjacency)
+/// runs one work item per pixel of its image, so `work_items` must be n, its pixel count.
 template <class Backend, class Active, class Adjacency>
 void connected_components(const Backend& b, std::int64_t n, Active active, std::int64_t work_items, Adjacency adj,
                           std::int32_t* parent) {
   detail::require(n >= 0 && n < (std::int64_t(1) << 31), "union-find supports up to 2^31 - 1 elements");
   b.for_each_index(n, detail::uf_init_kernel<Active>{active, parent});
-  b.for_each_index(work_items, detail::uf_union_kernel<Adjacency>{adj, parent});
+  if constexpr (detail::is_grid_adjacency<Adjacency>) {
+    detail::require(work_items == n && static_cast<std::int64_t>(adj.grid_width()) * adj.grid_height() == n,
+                    "connected_components: a grid adjacency needs one work item per pixel of its image");
+    detail::for_each_pixel(b, adj.grid_width(), adj.grid_height(), detail::uf_union_grid_kernel<Adjacency>{adj, parent});
+  } else {
+    b.for_each_index(work_items, detail::uf_union_kernel<Adjacency>{adj, parent});
+  }
   b.for_each_index(n, detail::uf_flatten_kernel{parent});
 }
 

@@ -43,23 +43,10 @@ inline float fixed_point_max_depth(const intrinsics& k, int w, int h) {
 
 namespace detail {
 
-/// Labels from the union-find: element i belongs to candidate cand_index[root(i)] (1-based; 0 =
-/// none).
-struct candidate_labels {
-  const std::int32_t* parent;
-  const std::int32_t* cand_index;
-  EDGEPLANE_HD std::int32_t operator()(std::int64_t i) const {
-    const std::int32_t r = parent[i];
-    return r < 0 ? 0 : cand_index[r];
-  }
-};
-
 /// Labels from a candidate-id image (int32, 0 = none).
 struct candidate_image_labels {
   image_view<const std::int32_t> cand;
-  EDGEPLANE_HD std::int32_t operator()(std::int64_t i) const {
-    return cand(static_cast<int>(i % cand.width), static_cast<int>(i / cand.width));
-  }
+  EDGEPLANE_HD std::int32_t operator()(int x, int y) const { return cand(x, y); }
 };
 
 /// Inliers of merged candidates: pixel i counts for plane g = table[cand(i)] only when its point
@@ -72,8 +59,7 @@ struct inlier_labels {
   const float* tol;
   image_view<const float> depth;
   projector proj;
-  EDGEPLANE_HD std::int32_t operator()(std::int64_t i) const {
-    const int x = static_cast<int>(i % cand.width), y = static_cast<int>(i / cand.width);
+  EDGEPLANE_HD std::int32_t operator()(int x, int y) const {
     const std::int32_t c = cand(x, y);
     if (c <= 0) return 0;
     const std::int32_t g = table[c];
@@ -87,9 +73,7 @@ struct inlier_labels {
 /// Labels from a label image (0 = none).
 struct image_labels {
   image_view<const std::uint16_t> labels;
-  EDGEPLANE_HD std::int32_t operator()(std::int64_t i) const {
-    return labels(static_cast<int>(i % labels.width), static_cast<int>(i / labels.width));
-  }
+  EDGEPLANE_HD std::int32_t operator()(int x, int y) const { return labels(x, y); }
 };
 
 /// One work item per row: accumulates the moments of consecutive pixels of one label locally and
@@ -121,7 +105,7 @@ struct moments_kernel {
     std::int32_t cur = 0;
     int x0 = 0;
     for (int x = 0; x < w; ++x) {
-      const std::int32_t l = label_of(static_cast<std::int64_t>(y) * w + x);
+      const std::int32_t l = label_of(x, y);
       if (l != cur) {
         flush(cur, s, x0, x - 1, y);
         for (int k = 0; k < moment_slots; ++k) s[k] = 0;
@@ -202,8 +186,8 @@ inline plane_fit fit_plane(const std::uint64_t* m, const std::int32_t* bb = null
   return f;
 }
 
-/// Accumulates the moments and bounding boxes of labels 1..num_labels (label_of(i) gives pixel
-/// i's label) into backend buffers `moments` ((num_labels + 1) * moment_slots) and `bbox`
+/// Accumulates the moments and bounding boxes of labels 1..num_labels (label_of(x, y) gives
+/// pixel (x, y)'s label) into backend buffers `moments` ((num_labels + 1) * moment_slots) and `bbox`
 /// ((num_labels + 1) * 4), which this call clears first.  Asynchronous on device backends.
 /// Precondition: valid depths are at most fixed_point_max_depth(k, w, h) (the segmenter's depth
 /// conversion ensures it), so that the fixed-point sums are exact.
