@@ -161,7 +161,7 @@ class segmenter {
   /// Bytes of scratch memory held in the backend's memory.
   std::size_t scratch_bytes() const {
     return raw_in_.capacity_bytes() + z_a_.capacity_bytes() + z_b_.capacity_bytes() + z_c_.capacity_bytes() +
-           z_proc_.capacity_bytes() + z_smooth_.capacity_bytes() + edges_.capacity_bytes() + mask_.capacity_bytes() + cov_l_.capacity_bytes() +
+           z_proc_.capacity_bytes() + z_smooth_.capacity_bytes() + edges_.capacity_bytes() + mask_.capacity_bytes() + runs_.capacity_bytes() + cov_l_.capacity_bytes() +
            cov_r_.capacity_bytes() + parent_.capacity_bytes() + count_.capacity_bytes() + flags_.capacity_bytes() +
            scan_.capacity_bytes() + cand_.capacity_bytes() + failed_.capacity_bytes() + moments_.capacity_bytes() + bbox_.capacity_bytes() + table_.capacity_bytes() +
            planes_.capacity_bytes() + tol_.capacity_bytes() + flag_.capacity_bytes() + lab_a_.capacity_bytes() + lab_b_.capacity_bytes() + lab_c_.capacity_bytes() +
@@ -183,6 +183,7 @@ class segmenter {
     z_smooth_.set_backend(b_);
     edges_.set_backend(b_);
     mask_.set_backend(b_);
+    runs_.set_backend(b_);
     cov_l_.set_backend(b_);
     cov_r_.set_backend(b_);
     parent_.set_backend(b_);
@@ -322,7 +323,8 @@ class segmenter {
     cov_l_.resize(n);
     const auto edges = view(edges_.data(), pw_, ph_), mask = view(mask_.data(), pw_, ph_),
                scratch8 = view(cov_l_.data(), pw_, ph_);
-    detect_edges(b_, z, kp, p_, edges);
+    if constexpr (detail::row_lanes<Backend> > 1) runs_.resize(static_cast<std::size_t>(8) * n);
+    detect_edges(b_, z, kp, p_, edges, runs_.data());
     close_edges(b_, edges, scratch8, mask, p_.edge_closing_radius);
     b_.synchronize();
     out.times.edges = ms_since(t);
@@ -557,7 +559,7 @@ class segmenter {
   int pw_ = 0, ph_ = 0;
   buffer<unsigned char, Backend> raw_in_;
   buffer<float, Backend> z_a_, z_b_, z_c_, z_proc_, z_smooth_;
-  buffer<std::uint8_t, Backend> edges_, mask_, cov_l_, cov_r_;
+  buffer<std::uint8_t, Backend> edges_, mask_, cov_l_, cov_r_, runs_;
   buffer<std::int32_t, Backend> parent_, count_, flags_, scan_, cand_;
   buffer<std::uint8_t, Backend> failed_;
   buffer<std::uint64_t, Backend> moments_;

@@ -2,6 +2,7 @@
 #pragma once
 #include <cstdint>
 
+#include "edgeplane/backend/buffer.hpp"
 #include "edgeplane/camera.hpp"
 #include "edgeplane/config.hpp"
 #include "edgeplane/edges/directions.hpp"
@@ -59,17 +60,23 @@ inline edge_set make_edge_set(const params& p) {
   return e;
 }
 
+/// The enabled tests of one direction whose bits `tests` holds (bit 0 jump, 1 extrema, 2 corner,
+/// 3 curved) on neighbourhood nb; a test left out must be one that cannot fire there.
+EDGEPLANE_HD EDGEPLANE_INLINE std::uint8_t edges_of(const edge_set& set, const neighbourhood& nb, unsigned tests) {
+  std::uint8_t bits = 0;
+  if ((tests & 1u) && set.use_jump && set.jump(nb)) bits |= edge_type::jump::bit;
+  if ((tests & 2u) && set.use_extrema && set.extrema(nb)) bits |= edge_type::extrema::bit;
+  if ((tests & 4u) && set.use_corner && set.corner(nb)) bits |= edge_type::corner::bit;
+  if ((tests & 8u) && set.use_curved && set.curved(nb)) bits |= edge_type::curved::bit;
+  return bits;
+}
+
 template <class Direction>
 EDGEPLANE_HD EDGEPLANE_INLINE std::uint8_t edges_along(const edge_set& set, image_view<const float> depth, projector proj,
                                              int x, int y, int reach, bool interior) {
   neighbourhood nb;
   gather_along<Direction>(nb, depth, proj, x, y, reach, interior);
-  std::uint8_t bits = 0;
-  if (set.use_jump && set.jump(nb)) bits |= edge_type::jump::bit;
-  if (set.use_extrema && set.extrema(nb)) bits |= edge_type::extrema::bit;
-  if (set.use_corner && set.corner(nb)) bits |= edge_type::corner::bit;
-  if (set.use_curved && set.curved(nb)) bits |= edge_type::curved::bit;
-  return bits;
+  return edges_of(set, nb, 15u);
 }
 
 /// Flags of the interior pass, kept in the edge map's two spare bits until the edge pass
@@ -108,38 +115,137 @@ struct interior_columns_kernel {
   }
 };
 
+/// Valid-neighbour counts, the neighbourhood's nl and nr for every pixel and direction at once:
+/// plane 2 d + s of `runs` (8 dense w x h byte planes, d in the order horizontal, vertical, left
+/// diagonal, right diagonal; s = 0 the left side (-dx, -dy), 1 the right side) holds how many
+/// consecutive valid pixels follow the pixel on that side, at most r (0..r, r <= 255), stopping
+/// at the image border.  The horizontal planes: one work item per row, a running count.
+struct valid_runs_rows_kernel {
+  image_view<const float> depth;
+  std::uint8_t* runs;
+  int r;
+  EDGEPLANE_HD void operator()(std::int64_t row) const {
+    const int y = static_cast<int>(row), w = depth.width;
+    const std::int64_t n = static_cast<std::int64_t>(w) * depth.height, o = static_cast<std::int64_t>(y) * w;
+    std::uint8_t* left = runs + o;
+    std::uint8_t* right = runs + n + o;
+    int c = 0;
+    for (int x = 0; x < w; ++x) {
+      left[x] = static_cast<std::uint8_t>(c);
+      c = depth(x, y) > 0.f ? (c < r ? c + 1 : r) : 0;
+    }
+    c = 0;
+    for (int x = w - 1; x >= 0; --x) {
+      right[x] = static_cast<std::uint8_t>(c);
+      c = depth(x, y) > 0.f ? (c < r ? c + 1 : r) : 0;
+    }
+  }
+};
+/// The vertical and diagonal planes: one work item per band of `band` rows.  A row's count is the
+/// previous row's count at (x - dx) plus one where that pixel is valid (the next row's for the
+/// right side), so only each band's first row (last, for the right side) counts its neighbours
+/// one by one.
+struct valid_runs_bands_kernel {
+  image_view<const float> depth;
+  std::uint8_t* runs;
+  int r, band;
+  template <int Dx>
+  EDGEPLANE_HD EDGEPLANE_INLINE void plane(std::uint8_t* out, int y0, int y1, int sy) const {
+    // sy = -1: the left side (rows above, x - Dx); +1: the right side (rows below, x + Dx)
+    const int w = depth.width, h = depth.height, sx = sy * Dx;
+    const int first = sy < 0 ? y0 : y1 - 1, last = sy < 0 ? y1 : y0 - 1;
+    for (int x = 0; x < w; ++x) {  // the first row: count up to r neighbours
+      int c = 0;
+      for (int k = 1; k <= r; ++k) {
+        const int u = x + k * sx, v = first + k * sy;
+        if (u < 0 || u >= w || v < 0 || v >= h || !(depth(u, v) > 0.f)) break;
+        ++c;
+      }
+      out[static_cast<std::int64_t>(first) * w + x] = static_cast<std::uint8_t>(c);
+    }
+    for (int y = first - sy; y != last; y -= sy) {  // then each row from its predecessor on that side
+      const int v = y + sy;
+      const std::uint8_t* prev = out + static_cast<std::int64_t>(v) * w;
+      std::uint8_t* cur = out + static_cast<std::int64_t>(y) * w;
+      const float* zp = &depth(0, v);
+      const int xa = sx < 0 ? 1 : 0, xb = sx > 0 ? w - 1 : w;  // x + sx inside the image
+      if (sx < 0) cur[0] = 0;
+      if (sx > 0) cur[w - 1] = 0;
+      for (int x = xa; x < xb; ++x) {
+        const int c = prev[x + sx] + 1;
+        cur[x] = static_cast<std::uint8_t>(zp[x + sx] > 0.f ? (c < r ? c : r) : 0);
+      }
+    }
+  }
+  EDGEPLANE_HD void operator()(std::int64_t item) const {
+    const int y0 = static_cast<int>(item) * band;
+    const int y1 = y0 + band < depth.height ? y0 + band : depth.height;
+    const std::int64_t n = static_cast<std::int64_t>(depth.width) * depth.height;
+    plane<0>(runs + 2 * n, y0, y1, -1);
+    plane<0>(runs + 3 * n, y0, y1, +1);
+    plane<1>(runs + 4 * n, y0, y1, -1);
+    plane<1>(runs + 5 * n, y0, y1, +1);
+    plane<-1>(runs + 6 * n, y0, y1, -1);
+    plane<-1>(runs + 7 * n, y0, y1, +1);
+  }
+};
+
 /// All enabled edge types along all four directions, one pass; invalid pixels get edge_invalid.
-/// Reads the interior flag the interior pass left in `edges` (a pixel whose whole window of
-/// `reach` is valid needs no neighbour counting) and overwrites the pixel with its edge bits.
+/// A pixel's neighbour counts come from `runs` (valid_runs_*_kernel) when it is given; otherwise
+/// from the interior flag the interior pass left in `edges` (a pixel whose whole window of
+/// `reach` is valid needs no counting) or by reading the neighbours.  Overwrites the pixel with
+/// its edge bits.
 struct all_edges_kernel {
   image_view<const float> depth;
   image_view<std::uint8_t> edges;
   projector proj;
   edge_set set;
   int reach;
-  EDGEPLANE_HD void operator()(int x, int y) const {
+  const std::uint8_t* runs = nullptr;  // 8 dense planes of valid-neighbour counts, or null
+
+  template <class Direction, int D>
+  EDGEPLANE_HD EDGEPLANE_INLINE std::uint8_t along(int x, int y, bool interior, unsigned tests) const {
+    const unsigned t = (tests >> (4 * D)) & 15u;
+    if (!t) return 0;
+    neighbourhood nb;
+    if (runs != nullptr) {
+      gather_along<Direction>(nb, depth, proj, x, y, reach, true);
+      const std::int64_t n = static_cast<std::int64_t>(depth.width) * depth.height;
+      const std::int64_t i = static_cast<std::int64_t>(y) * depth.width + x;
+      nb.nl = runs[2 * D * n + i];
+      nb.nr = runs[(2 * D + 1) * n + i];
+    } else {
+      gather_along<Direction>(nb, depth, proj, x, y, reach, interior);
+    }
+    return edges_of(set, nb, t);
+  }
+  /// The tests of `tests` (bit 4 d + j: test j along direction d, in the order of `along`); the
+  /// others must be tests that cannot fire at this pixel.
+  EDGEPLANE_HD EDGEPLANE_INLINE void run(int x, int y, unsigned tests) const {
     if (!(depth(x, y) > 0.f)) {
       edges(x, y) = edge_invalid;
       return;
     }
-    const bool interior = (edges(x, y) & interior_flag) != 0;
-    std::uint8_t b = edges_along<direction::horizontal>(set, depth, proj, x, y, reach, interior);
-    b |= edges_along<direction::vertical>(set, depth, proj, x, y, reach, interior);
-    b |= edges_along<direction::left_diagonal>(set, depth, proj, x, y, reach, interior);
-    b |= edges_along<direction::right_diagonal>(set, depth, proj, x, y, reach, interior);
+    const bool interior = runs == nullptr && (edges(x, y) & interior_flag) != 0;
+    std::uint8_t b = along<direction::horizontal, 0>(x, y, interior, tests);
+    b |= along<direction::vertical, 1>(x, y, interior, tests);
+    b |= along<direction::left_diagonal, 2>(x, y, interior, tests);
+    b |= along<direction::right_diagonal, 3>(x, y, interior, tests);
     edges(x, y) = b;
   }
+  EDGEPLANE_HD void operator()(int x, int y) const { run(x, y, 0xffffu); }
 };
 
 /// all_edges_kernel over runs of Lanes pixels of one row (work item = row * chunks + chunk), for
-/// host backends.  Most pixels lie on surfaces, where every test stops at its first, cheap
-/// condition.  Those first conditions are evaluated here for all lanes at once, with exactly the
-/// float operations of the scalar tests (so g++ can vectorize them and the decisions are the
-/// same): the jump test, the nearest-neighbour extrema condition, the corner's bend pre-test at c
-/// and the curved arc pre-test of both sides (detail::farther_than's sure rejection), in all
-/// four directions.  A lane where every one of them rejects gets no edge bits, as the scalar
-/// kernel would give it; every other pixel (a possible edge, a pixel near invalid depth or the
-/// border) runs all_edges_kernel itself.  So the edge map is identical bit for bit.
+/// host backends, with the neighbour counts (px.runs) given.  Most pixels lie on surfaces, where
+/// every test stops at its first, cheap condition.  Those first conditions are evaluated here for
+/// all lanes at once, with exactly the float operations of the scalar tests (so g++ can vectorize
+/// them and the decisions are the same): the jump test, the nearest-neighbour extrema condition,
+/// the corner's bend pre-test at c and the curved arc pre-test of both sides
+/// (detail::farther_than's sure rejection), in all four directions.  For a lane whose neighbours
+/// are all valid out to `reach` along the four lines, a test whose first condition rejects cannot
+/// fire, and the scalar kernel runs only the others (none, on a surface); a lane nearer invalid
+/// depth runs all of them with its counts.  So the edge map is identical bit for bit.
 template <int Lanes>
 struct all_edges_rows_kernel {
   all_edges_kernel px;
@@ -164,10 +270,12 @@ struct all_edges_rows_kernel {
     return pr(x + k * Direction::dx, y + k * Direction::dy, c[l + k * step]);
   }
 
-  template <class Direction>
+  // ORs into maybe[l] the bit 4 D + j of every test j along Direction whose first condition does
+  // not reject lane l.
+  template <class Direction, int D>
   EDGEPLANE_HD EDGEPLANE_INLINE void maybe_along(const float* c, int x0, int y, std::ptrdiff_t pitch,
                                                  const float* zc, const float* noise_co, const float* noise_cu,
-                                                 int* maybe) const {
+                                                 unsigned* maybe) const {
     constexpr int dx = Direction::dx, dy = Direction::dy;
     const std::ptrdiff_t step = static_cast<std::ptrdiff_t>(dy) * pitch + dx;
     const edge_set& s = px.set;
@@ -178,7 +286,7 @@ struct all_edges_rows_kernel {
         const float z = zc[l];
         const float t = j.t_abs + j.t_quad * z * z;
         const float dl = fabsf(c[l - step] - z), dr = fabsf(c[l + step] - z);  // >= 0: (d > 0 ? d : 0) == d
-        maybe[l] |= static_cast<int>((dl > t + j.t_ratio * dr) | (dr > t + j.t_ratio * dl));
+        maybe[l] |= static_cast<unsigned>((dl > t + j.t_ratio * dr) | (dr > t + j.t_ratio * dl)) << (4 * D);
       }
     }
     if (s.use_extrema) {
@@ -186,17 +294,18 @@ struct all_edges_rows_kernel {
       for (int l = 0; l < Lanes; ++l) {
         const float z = zc[l], a = c[l - step], b = c[l + step];
         const bool nearer = (z < t * a) & (z < t * b), farther = (z * t > a) & (z * t > b);
-        maybe[l] |= static_cast<int>(nearer | farther);
+        maybe[l] |= static_cast<unsigned>(nearer | farther) << (4 * D + 1);
       }
     }
     if (s.use_corner) {
       const int n = s.corner.n, h = n / 2 > 0 ? n / 2 : 1;
       const float t = s.corner.t_bend;
       for (int l = 0; l < Lanes; ++l)
-        maybe[l] |= static_cast<int>(!surely_not_farther(at<Direction>(pr, c, step, x0 + l, y, l, 0),
-                                                         at<Direction>(pr, c, step, x0 + l, y, l, -h),
-                                                         at<Direction>(pr, c, step, x0 + l, y, l, h), t,
-                                                         noise_co[l]));
+        maybe[l] |= static_cast<unsigned>(!surely_not_farther(at<Direction>(pr, c, step, x0 + l, y, l, 0),
+                                                              at<Direction>(pr, c, step, x0 + l, y, l, -h),
+                                                              at<Direction>(pr, c, step, x0 + l, y, l, h), t,
+                                                              noise_co[l]))
+                    << (4 * D + 2);
     }
     if (s.use_curved) {
       const int n = s.curved.n, mid = n / 2 > 0 ? n / 2 : 1;
@@ -208,7 +317,7 @@ struct all_edges_rows_kernel {
         const point3 mr = at<Direction>(pr, c, step, x, y, l, mid), er = at<Direction>(pr, c, step, x, y, l, n);
         const bool no_l = surely_not_farther(ml, p, el, t, noise_cu[l]);
         const bool no_r = surely_not_farther(mr, p, er, t, noise_cu[l]);
-        maybe[l] |= static_cast<int>(!(no_l & no_r));
+        maybe[l] |= static_cast<unsigned>(!(no_l & no_r)) << (4 * D + 3);
       }
     }
   }
@@ -222,23 +331,32 @@ struct all_edges_rows_kernel {
       return;
     }
     const float* c = &px.depth(x0, y);
+    const std::int64_t n = static_cast<std::int64_t>(w) * px.depth.height, i0 = static_cast<std::int64_t>(y) * w + x0;
     float zc[Lanes], noise_co[Lanes], noise_cu[Lanes];
-    int maybe[Lanes];
+    unsigned maybe[Lanes];
+    int full[Lanes];  // every count is reach: the pixel is valid and so are all the neighbours read
     for (int l = 0; l < Lanes; ++l) {
       zc[l] = c[l];
       noise_co[l] = px.set.corner.noise_k * px.set.corner.sigma(zc[l]);
       noise_cu[l] = px.set.curved.noise_k * px.set.curved.sigma(zc[l]);
       maybe[l] = 0;
+      full[l] = zc[l] > 0.f;
+    }
+    for (int q = 0; q < 8; ++q) {
+      const std::uint8_t* cnt = px.runs + q * n + i0;
+      for (int l = 0; l < Lanes; ++l) full[l] &= cnt[l] == r;
     }
     const std::ptrdiff_t pitch = px.depth.pitch;
-    maybe_along<direction::horizontal>(c, x0, y, pitch, zc, noise_co, noise_cu, maybe);
-    maybe_along<direction::vertical>(c, x0, y, pitch, zc, noise_co, noise_cu, maybe);
-    maybe_along<direction::left_diagonal>(c, x0, y, pitch, zc, noise_co, noise_cu, maybe);
-    maybe_along<direction::right_diagonal>(c, x0, y, pitch, zc, noise_co, noise_cu, maybe);
+    maybe_along<direction::horizontal, 0>(c, x0, y, pitch, zc, noise_co, noise_cu, maybe);
+    maybe_along<direction::vertical, 1>(c, x0, y, pitch, zc, noise_co, noise_cu, maybe);
+    maybe_along<direction::left_diagonal, 2>(c, x0, y, pitch, zc, noise_co, noise_cu, maybe);
+    maybe_along<direction::right_diagonal, 3>(c, x0, y, pitch, zc, noise_co, noise_cu, maybe);
     std::uint8_t* e = &px.edges(x0, y);
     for (int l = 0; l < Lanes; ++l) {
-      if (maybe[l] || !(e[l] & interior_flag))
-        px(x0 + l, y);
+      if (!full[l])
+        px.run(x0 + l, y, 0xffffu);  // invalid, or near invalid depth: every test, with its counts
+      else if (maybe[l])
+        px.run(x0 + l, y, maybe[l]);
       else
         e[l] = 0;
     }
@@ -307,20 +425,37 @@ void detect_edge(const Backend& b, image_view<const float> depth, const intrinsi
 }
 
 /// All enabled edge types over the four directions in one pass: writes every pixel of `edges`
-/// (edge_bits; edge_invalid where depth is invalid).  Two cheap passes first mark, in `edges`
-/// itself, the pixels whose whole neighbourhood is valid, so the edge pass reads only the
-/// neighbours each test needs.  Asynchronous on device backends.
+/// (edge_bits; edge_invalid where depth is invalid).  `runs`: scratch of 8 w x h bytes in the
+/// backend's memory for the valid-neighbour counts, used by host backends (empty: allocated per
+/// call).  Device backends mark, in `edges` itself, the pixels whose whole neighbourhood is
+/// valid, and count the neighbours of the others in the edge pass.  Asynchronous on device
+/// backends.
 template <class Backend>
 void detect_edges(const Backend& b, image_view<const float> depth, const intrinsics& k, const params& p,
-                  image_view<std::uint8_t> edges) {
+                  image_view<std::uint8_t> edges, std::uint8_t* runs = nullptr) {
   detail::check_intrinsics(k);
   detail::check_same_size(depth, edges, "depth", "edges");
   const detail::edge_set set = detail::make_edge_set(p);
   const int reach = set.reach();
-  b.for_each_index(depth.height, detail::interior_rows_kernel{depth, edges, reach});
-  b.for_each_index(depth.width, detail::interior_columns_kernel{edges, reach});
-  detail::for_each_pixel_run<detail::all_edges_rows_kernel>(
-      b, depth.width, depth.height, detail::all_edges_kernel{depth, edges, detail::make_projector(k), set, reach});
+  const int w = depth.width, h = depth.height;
+  if (w <= 0 || h <= 0) return;
+  detail::all_edges_kernel px{depth, edges, detail::make_projector(k), set, reach};
+  buffer<std::uint8_t, Backend> own;  // lives until the edge pass is done
+  if constexpr (detail::row_lanes<Backend> > 1) {
+    if (runs == nullptr) {
+      own = buffer<std::uint8_t, Backend>(b);
+      own.resize(static_cast<std::size_t>(8) * w * h);
+      runs = own.data();
+    }
+    constexpr int band = 32;
+    b.for_each_index(h, detail::valid_runs_rows_kernel{depth, runs, reach});
+    b.for_each_index((h + band - 1) / band, detail::valid_runs_bands_kernel{depth, runs, reach, band});
+    px.runs = runs;
+  } else {
+    b.for_each_index(h, detail::interior_rows_kernel{depth, edges, reach});
+    b.for_each_index(w, detail::interior_columns_kernel{edges, reach});
+  }
+  detail::for_each_pixel_run<detail::all_edges_rows_kernel>(b, w, h, px);
 }
 
 /// Closing (dilate, then erode) of the edge map with a (2r+1)^2 window: `mask` becomes 1 on edge
