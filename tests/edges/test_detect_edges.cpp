@@ -186,12 +186,13 @@ TEST_CASE_TEMPLATE("close_edges: an edge line ending at the image border is kept
 }
 
 // On host backends detect_edges runs detail::all_edges_rows_kernel (cheap first conditions for 16
-// pixels at once, the scalar kernel wherever one of them may fire); the device backend runs
-// detail::all_edges_kernel per pixel.  The edge maps must be equal byte for byte, for every preset's
-// thresholds, on a scene large enough that most runs take the 16-pixel path.
-TEST_CASE("detect_edges: the 16-pixel row kernel gives the per-pixel kernel's edge map") {
-  const int w = 203, h = 157;  // not a multiple of 16
-  const intrinsics k{180.f, 180.f, 101.f, 78.f};
+// pixels at once behind precomputed neighbour counts, the scalar kernel wherever one of them may
+// fire); the device backend runs detail::all_edges_kernel per pixel after the interior pass.  The
+// edge maps must be equal byte for byte, for every preset's thresholds, on a scene large enough
+// that most runs take the 16-pixel path: with a hole, pepper noise and an invalid band (lanes whose
+// lines end at invalid depth), and in a view whose pitch exceeds its width.
+namespace {
+std::vector<float> row_kernel_scene(int w, int h, const intrinsics& k, bool holes) {
   std::vector<float> z(static_cast<std::size_t>(w) * h);
   lcg_noise noise(5);
   for (int y = 0; y < h; ++y)
@@ -205,27 +206,88 @@ TEST_CASE("detect_edges: the 16-pixel row kernel gives the per-pixel kernel's ed
     }
   for (int y = 100; y < 108; ++y)
     for (int x = 170; x < 180; ++x) z[static_cast<std::size_t>(y) * w + x] = 0.f;  // hole
-  const auto zv = make_view<const float>(z.data(), w, h);
-  for (const auto& name : presets::preset_names()) {
-    CAPTURE(name);
-    const params p = preset(name);
-    std::vector<std::uint8_t> rows(z.size(), 0xee), pixels(z.size(), 0xdd);
-    detect_edges(cpu{}, zv, k, p, make_view(rows.data(), w, h));
-    const detail::edge_set set = detail::make_edge_set(p);
-    const int reach = set.reach();
-    const auto ev = make_view(pixels.data(), w, h);
-    const cpu serial{cpu::mode::serial};
-    serial.for_each_index(h, detail::interior_rows_kernel{zv, ev, reach});
-    serial.for_each_index(w, detail::interior_columns_kernel{ev, reach});
-    for (int y = 0; y < h; ++y)  // the per-pixel kernel itself, pixel by pixel
-      for (int x = 0; x < w; ++x) detail::all_edges_kernel{zv, ev, detail::make_projector(k), set, reach}(x, y);
-    int differ = 0, edges = 0;
-    for (std::size_t i = 0; i < z.size(); ++i) {
-      differ += rows[i] != pixels[i];
-      edges += pixels[i] != 0 && pixels[i] != edge_invalid;
+  if (holes) {
+    for (int i = 0; i < w * h / 40; ++i) z[noise.next_u32(static_cast<std::uint32_t>(w * h))] = 0.f;  // pepper
+    for (int y = 50; y < 53; ++y)
+      for (int x = 0; x < 90; ++x) z[static_cast<std::size_t>(y) * w + x] = 0.f;  // a band from the border
+    // invalid columns two pixels either side of the step: jumps whose side holds one neighbour
+    for (int y = 0; y < h; ++y) z[static_cast<std::size_t>(y) * w + (y < h / 2 ? 138 : 141)] = 0.f;
+  }
+  return z;
+}
+}  // namespace
+
+TEST_CASE("detect_edges: the 16-pixel row kernel gives the per-pixel kernel's edge map") {
+  const int w = 203, h = 157;  // not a multiple of 16
+  const intrinsics k{180.f, 180.f, 101.f, 78.f};
+  for (const bool holes : {false, true})
+    for (const int pitch : {w, w + 21}) {
+      CAPTURE(holes);
+      CAPTURE(pitch);
+      const std::vector<float> dense = row_kernel_scene(w, h, k, holes);
+      std::vector<float> z(static_cast<std::size_t>(pitch) * h, 7.f);  // padding: never read as depth
+      for (int y = 0; y < h; ++y)
+        std::copy_n(dense.begin() + static_cast<std::ptrdiff_t>(y) * w, w, z.begin() + static_cast<std::ptrdiff_t>(y) * pitch);
+      const image_view<const float> zv{z.data(), w, h, pitch};
+      for (const auto& name : presets::preset_names()) {
+        CAPTURE(name);
+        const params p = preset(name);
+        std::vector<std::uint8_t> rows(dense.size(), 0xee), pixels(dense.size(), 0xdd);
+        detect_edges(cpu{}, zv, k, p, make_view(rows.data(), w, h));
+        const detail::edge_set set = detail::make_edge_set(p);
+        const int reach = set.reach();
+        const auto ev = make_view(pixels.data(), w, h);
+        const cpu serial{cpu::mode::serial};
+        serial.for_each_index(h, detail::interior_rows_kernel{zv, ev, reach});
+        serial.for_each_index(w, detail::interior_columns_kernel{ev, reach});
+        for (int y = 0; y < h; ++y)  // the per-pixel kernel itself, pixel by pixel
+          for (int x = 0; x < w; ++x) detail::all_edges_kernel{zv, ev, detail::make_projector(k), set, reach}(x, y);
+        int differ = 0, edges = 0;
+        for (std::size_t i = 0; i < dense.size(); ++i) {
+          differ += rows[i] != pixels[i];
+          edges += pixels[i] != 0 && pixels[i] != edge_invalid;
+        }
+        CHECK(differ == 0);
+        CHECK(edges > 100);                 // the scene has edges of several kinds...
+        CHECK(edges < static_cast<int>(dense.size()) / 3);  // ...and mostly surface
+      }
     }
-    CHECK(differ == 0);
-    CHECK(edges > 100);                 // the scene has edges of several kinds...
-    CHECK(edges < static_cast<int>(z.size()) / 3);  // ...and mostly surface
+}
+
+// The valid-neighbour counts the host edge pass reads: plane 2 d + s holds, for every pixel, how
+// many consecutive valid pixels follow it on side s of direction d (at most r, stopping at the
+// border), counted here one by one.
+TEST_CASE("valid_runs kernels count each pixel's valid neighbours on all eight sides") {
+  const int w = 70, h = 75;  // bands of 32 rows: a band boundary, and a short last band
+  std::vector<float> z(static_cast<std::size_t>(w) * h, 1.5f);
+  lcg_noise noise(11);
+  for (int i = 0; i < w * h / 6; ++i) z[noise.next_u32(static_cast<std::uint32_t>(w * h))] = 0.f;
+  for (int x = 10; x < 40; ++x) z[static_cast<std::size_t>(20) * w + x] = 0.f;  // a line, and one that ends at the border
+  for (int y = 0; y < 30; ++y) z[static_cast<std::size_t>(y) * w + 50] = 0.f;
+  const auto zv = make_view<const float>(z.data(), w, h);
+  const int dxs[4] = {1, 0, 1, -1}, dys[4] = {0, 1, 1, 1};  // horizontal, vertical, left and right diagonal
+  for (const int r : {1, 5, 16}) {
+    CAPTURE(r);
+    std::vector<std::uint8_t> runs(static_cast<std::size_t>(8) * w * h, 0xab);
+    const cpu b{};
+    b.for_each_index(h, detail::valid_runs_rows_kernel{zv, runs.data(), r});
+    b.for_each_index((h + 31) / 32, detail::valid_runs_bands_kernel{zv, runs.data(), r, 32});
+    int wrong = 0, full = 0;
+    for (int d = 0; d < 4; ++d)
+      for (int s = 0; s < 2; ++s)
+        for (int y = 0; y < h; ++y)
+          for (int x = 0; x < w; ++x) {
+            const int sx = s == 0 ? -dxs[d] : dxs[d], sy = s == 0 ? -dys[d] : dys[d];
+            int c = 0;
+            while (c < r) {
+              const int u = x + (c + 1) * sx, v = y + (c + 1) * sy;
+              if (u < 0 || u >= w || v < 0 || v >= h || !(zv(u, v) > 0.f)) break;
+              ++c;
+            }
+            wrong += runs[static_cast<std::size_t>(2 * d + s) * w * h + static_cast<std::size_t>(y) * w + x] != c;
+            full += c == r;
+          }
+    CHECK(wrong == 0);
+    CHECK(full > 0);  // not all counts cut short
   }
 }

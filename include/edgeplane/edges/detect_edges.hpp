@@ -242,10 +242,10 @@ struct all_edges_kernel {
 /// all lanes at once, with exactly the float operations of the scalar tests (so g++ can vectorize
 /// them and the decisions are the same): the jump test, the nearest-neighbour extrema condition,
 /// the corner's bend pre-test at c and the curved arc pre-test of both sides
-/// (detail::farther_than's sure rejection), in all four directions.  For a lane whose neighbours
-/// are all valid out to `reach` along the four lines, a test whose first condition rejects cannot
-/// fire, and the scalar kernel runs only the others (none, on a surface); a lane nearer invalid
-/// depth runs all of them with its counts.  So the edge map is identical bit for bit.
+/// (detail::farther_than's sure rejection), in all four directions, each behind the neighbour
+/// counts its scalar test requires.  A test that its counts or its first condition reject cannot
+/// fire, so the scalar kernel runs only the others at that pixel (none, on a surface).  So the
+/// edge map is identical bit for bit.
 template <int Lanes>
 struct all_edges_rows_kernel {
   all_edges_kernel px;
@@ -270,42 +270,49 @@ struct all_edges_rows_kernel {
     return pr(x + k * Direction::dx, y + k * Direction::dy, c[l + k * step]);
   }
 
-  // ORs into maybe[l] the bit 4 D + j of every test j along Direction whose first condition does
-  // not reject lane l.
+  // ORs into maybe[l] the bit 4 D + j of every test j along Direction that lane l's neighbour
+  // counts (cl, cr: nl and nr) and first condition do not reject.  A lane reads neighbours beyond
+  // its counts (invalid depth, or pixels of other rows past the border: garbage, never used,
+  // since every condition on them is masked by the counts the scalar test checks first).
   template <class Direction, int D>
   EDGEPLANE_HD EDGEPLANE_INLINE void maybe_along(const float* c, int x0, int y, std::ptrdiff_t pitch,
                                                  const float* zc, const float* noise_co, const float* noise_cu,
+                                                 const std::uint8_t* cl, const std::uint8_t* cr,
                                                  unsigned* maybe) const {
     constexpr int dx = Direction::dx, dy = Direction::dy;
     const std::ptrdiff_t step = static_cast<std::ptrdiff_t>(dy) * pitch + dx;
     const edge_set& s = px.set;
     const projector pr = px.proj;
-    if (s.use_jump) {
+    if (s.use_jump) {  // the whole jump test, as edge_type::jump computes it
       const edge_type::jump& j = s.jump;
       for (int l = 0; l < Lanes; ++l) {
         const float z = zc[l];
         const float t = j.t_abs + j.t_quad * z * z;
-        const float dl = fabsf(c[l - step] - z), dr = fabsf(c[l + step] - z);  // >= 0: (d > 0 ? d : 0) == d
-        maybe[l] |= static_cast<unsigned>((dl > t + j.t_ratio * dr) | (dr > t + j.t_ratio * dl)) << (4 * D);
+        const float dl = cl[l] >= 1 ? fabsf(c[l - step] - z) : -1.f;
+        const float dr = cr[l] >= 1 ? fabsf(c[l + step] - z) : -1.f;
+        const bool jl = dl > t + j.t_ratio * (dr > 0.f ? dr : 0.f);
+        const bool jr = dr > t + j.t_ratio * (dl > 0.f ? dl : 0.f);
+        maybe[l] |= static_cast<unsigned>(jl | jr) << (4 * D);
       }
     }
     if (s.use_extrema) {
       const float t = s.extrema.t;
+      const int n = s.extrema.n;
       for (int l = 0; l < Lanes; ++l) {
         const float z = zc[l], a = c[l - step], b = c[l + step];
         const bool nearer = (z < t * a) & (z < t * b), farther = (z * t > a) & (z * t > b);
-        maybe[l] |= static_cast<unsigned>(nearer | farther) << (4 * D + 1);
+        maybe[l] |= static_cast<unsigned>((cl[l] >= n) & (cr[l] >= n) & (nearer | farther)) << (4 * D + 1);
       }
     }
     if (s.use_corner) {
       const int n = s.corner.n, h = n / 2 > 0 ? n / 2 : 1;
       const float t = s.corner.t_bend;
-      for (int l = 0; l < Lanes; ++l)
-        maybe[l] |= static_cast<unsigned>(!surely_not_farther(at<Direction>(pr, c, step, x0 + l, y, l, 0),
-                                                              at<Direction>(pr, c, step, x0 + l, y, l, -h),
-                                                              at<Direction>(pr, c, step, x0 + l, y, l, h), t,
-                                                              noise_co[l]))
-                    << (4 * D + 2);
+      for (int l = 0; l < Lanes; ++l) {
+        const bool bend = !surely_not_farther(at<Direction>(pr, c, step, x0 + l, y, l, 0),
+                                              at<Direction>(pr, c, step, x0 + l, y, l, -h),
+                                              at<Direction>(pr, c, step, x0 + l, y, l, h), t, noise_co[l]);
+        maybe[l] |= static_cast<unsigned>((cl[l] >= n) & (cr[l] >= n) & bend) << (4 * D + 2);
+      }
     }
     if (s.use_curved) {
       const int n = s.curved.n, mid = n / 2 > 0 ? n / 2 : 1;
@@ -317,44 +324,45 @@ struct all_edges_rows_kernel {
         const point3 mr = at<Direction>(pr, c, step, x, y, l, mid), er = at<Direction>(pr, c, step, x, y, l, n);
         const bool no_l = surely_not_farther(ml, p, el, t, noise_cu[l]);
         const bool no_r = surely_not_farther(mr, p, er, t, noise_cu[l]);
-        maybe[l] |= static_cast<unsigned>(!(no_l & no_r)) << (4 * D + 3);
+        maybe[l] |= static_cast<unsigned>((cl[l] >= n) & (cr[l] >= n) & !(no_l & no_r)) << (4 * D + 3);
       }
     }
   }
 
   EDGEPLANE_HD void operator()(std::int64_t item) const {
     const int y = static_cast<int>(item / chunks), x0 = static_cast<int>(item % chunks) * Lanes;
-    const int w = px.depth.width, r = px.reach;
-    if (x0 < r || x0 + Lanes > w - r || y < r || y >= px.depth.height - r) {  // windows may leave the image
+    const int w = px.depth.width, h = px.depth.height, r = px.reach;
+    // Every lane reads up to r steps of up to pitch + 1 elements either way: those reads must stay
+    // within the view's rows (and a run must not pass the row's end).
+    const std::int64_t pitch = px.depth.pitch, first = static_cast<std::int64_t>(y) * pitch + x0,
+                       reach_span = static_cast<std::int64_t>(r) * (pitch + 1);
+    if (x0 + Lanes > w || first < reach_span ||
+        first + Lanes - 1 + reach_span > static_cast<std::int64_t>(h - 1) * pitch + w - 1) {
       const int x1 = x0 + Lanes < w ? x0 + Lanes : w;
       for (int x = x0; x < x1; ++x) px(x, y);
       return;
     }
     const float* c = &px.depth(x0, y);
-    const std::int64_t n = static_cast<std::int64_t>(w) * px.depth.height, i0 = static_cast<std::int64_t>(y) * w + x0;
+    const std::int64_t n = static_cast<std::int64_t>(w) * h, i0 = static_cast<std::int64_t>(y) * w + x0;
     float zc[Lanes], noise_co[Lanes], noise_cu[Lanes];
     unsigned maybe[Lanes];
-    int full[Lanes];  // every count is reach: the pixel is valid and so are all the neighbours read
     for (int l = 0; l < Lanes; ++l) {
       zc[l] = c[l];
       noise_co[l] = px.set.corner.noise_k * px.set.corner.sigma(zc[l]);
       noise_cu[l] = px.set.curved.noise_k * px.set.curved.sigma(zc[l]);
       maybe[l] = 0;
-      full[l] = zc[l] > 0.f;
     }
-    for (int q = 0; q < 8; ++q) {
-      const std::uint8_t* cnt = px.runs + q * n + i0;
-      for (int l = 0; l < Lanes; ++l) full[l] &= cnt[l] == r;
-    }
-    const std::ptrdiff_t pitch = px.depth.pitch;
-    maybe_along<direction::horizontal, 0>(c, x0, y, pitch, zc, noise_co, noise_cu, maybe);
-    maybe_along<direction::vertical, 1>(c, x0, y, pitch, zc, noise_co, noise_cu, maybe);
-    maybe_along<direction::left_diagonal, 2>(c, x0, y, pitch, zc, noise_co, noise_cu, maybe);
-    maybe_along<direction::right_diagonal, 3>(c, x0, y, pitch, zc, noise_co, noise_cu, maybe);
+    const std::uint8_t* cnt = px.runs + i0;  // plane q of the counts at cnt + q * n
+    maybe_along<direction::horizontal, 0>(c, x0, y, pitch, zc, noise_co, noise_cu, cnt, cnt + n, maybe);
+    maybe_along<direction::vertical, 1>(c, x0, y, pitch, zc, noise_co, noise_cu, cnt + 2 * n, cnt + 3 * n, maybe);
+    maybe_along<direction::left_diagonal, 2>(c, x0, y, pitch, zc, noise_co, noise_cu, cnt + 4 * n, cnt + 5 * n,
+                                             maybe);
+    maybe_along<direction::right_diagonal, 3>(c, x0, y, pitch, zc, noise_co, noise_cu, cnt + 6 * n, cnt + 7 * n,
+                                              maybe);
     std::uint8_t* e = &px.edges(x0, y);
     for (int l = 0; l < Lanes; ++l) {
-      if (!full[l])
-        px.run(x0 + l, y, 0xffffu);  // invalid, or near invalid depth: every test, with its counts
+      if (!(zc[l] > 0.f))
+        e[l] = edge_invalid;
       else if (maybe[l])
         px.run(x0 + l, y, maybe[l]);
       else
