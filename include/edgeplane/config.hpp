@@ -19,6 +19,15 @@
 #define EDGEPLANE_INLINE inline
 #endif
 
+// Keeps a rarely taken slow path out of a hot loop (so the loop stays small and vectorized).
+#if defined(__CUDACC__)
+#define EDGEPLANE_NOINLINE __noinline__
+#elif defined(__GNUC__) || defined(__clang__)
+#define EDGEPLANE_NOINLINE __attribute__((noinline))
+#else
+#define EDGEPLANE_NOINLINE
+#endif
+
 // Device code asserts only in debug builds (never in release kernels).
 #if !defined(NDEBUG) && !defined(__CUDA_ARCH__)
 #include <cassert>
@@ -79,4 +88,27 @@ void for_each_pixel_run(const Backend& b, int w, int h, const Pixel& px) {
     b.for_each_index(static_cast<std::int64_t>(chunks) * h, RowKernel<lanes>{px, chunks});
   }
 }
+
+/// Host row kernels of windowed pixel kernels (closings): px.lanes<Lanes>(x0, y) computes pixels
+/// x0 .. x0 + Lanes - 1 of row y at once where all their (2 px.r + 1)^2 windows lie inside the
+/// image (px.out's size), and must give exactly what px(x, y) gives; px(x, y) runs elsewhere.
+/// Use as for_each_pixel_run<window_runs<Px>::template kernel>.
+template <class Px>
+struct window_runs {
+  template <int Lanes>
+  struct kernel {
+    Px px;
+    int chunks;
+    EDGEPLANE_HD void operator()(std::int64_t item) const {
+      const int y = static_cast<int>(item / chunks), x0 = static_cast<int>(item % chunks) * Lanes;
+      const int w = px.out.width, h = px.out.height, r = px.r;
+      if (x0 < r || x0 + Lanes > w - r || y < r || y >= h - r) {
+        const int x1 = x0 + Lanes < w ? x0 + Lanes : w;
+        for (int x = x0; x < x1; ++x) px(x, y);
+        return;
+      }
+      px.template lanes<Lanes>(x0, y);
+    }
+  };
+};
 }  // namespace edgeplane::detail

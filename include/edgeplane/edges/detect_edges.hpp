@@ -154,15 +154,23 @@ struct valid_runs_bands_kernel {
     // sy = -1: the left side (rows above, x - Dx); +1: the right side (rows below, x + Dx)
     const int w = depth.width, h = depth.height, sx = sy * Dx;
     const int first = sy < 0 ? y0 : y1 - 1, last = sy < 0 ? y1 : y0 - 1;
-    for (int x = 0; x < w; ++x) {  // the first row: count up to r neighbours
-      int c = 0;
-      for (int k = 1; k <= r; ++k) {
-        const int u = x + k * sx, v = first + k * sy;
-        if (u < 0 || u >= w || v < 0 || v >= h || !(depth(u, v) > 0.f)) break;
-        ++c;
+    // The first row counts its neighbours one step at a time for all x together: bit 7 of its
+    // bytes marks the pixels whose walk has met invalid depth or the border.
+    std::uint8_t* o = out + static_cast<std::int64_t>(first) * w;
+    for (int x = 0; x < w; ++x) o[x] = 0;
+    for (int k = 1; k <= r; ++k) {
+      const int v = first + k * sy, s = k * sx;
+      if (v < 0 || v >= h) break;  // every walk has ended
+      const float* zr = &depth(0, v);
+      const int xa = s < 0 ? (-s < w ? -s : w) : 0, xb = s > 0 ? (w - s > 0 ? w - s : 0) : w;  // x + s inside
+      for (int x = 0; x < xa; ++x) o[x] = static_cast<std::uint8_t>(o[x] | 0x80);
+      for (int x = xb; x < w; ++x) o[x] = static_cast<std::uint8_t>(o[x] | 0x80);
+      for (int x = xa; x < xb; ++x) {
+        const std::uint8_t dead = static_cast<std::uint8_t>((o[x] >> 7) | !(zr[x + s] > 0.f));
+        o[x] = static_cast<std::uint8_t>((dead << 7) | ((o[x] & 0x7f) + (dead ^ 1)));
       }
-      out[static_cast<std::int64_t>(first) * w + x] = static_cast<std::uint8_t>(c);
     }
+    for (int x = 0; x < w; ++x) o[x] = static_cast<std::uint8_t>(o[x] & 0x7f);
     for (int y = first - sy; y != last; y -= sy) {  // then each row from its predecessor on that side
       const int v = y + sy;
       const std::uint8_t* prev = out + static_cast<std::int64_t>(v) * w;
@@ -172,8 +180,9 @@ struct valid_runs_bands_kernel {
       if (sx < 0) cur[0] = 0;
       if (sx > 0) cur[w - 1] = 0;
       for (int x = xa; x < xb; ++x) {
-        const int c = prev[x + sx] + 1;
-        cur[x] = static_cast<std::uint8_t>(zp[x + sx] > 0.f ? (c < r ? c : r) : 0);
+        int c = prev[x + sx] + 1;
+        c = c < r ? c : r;
+        cur[x] = static_cast<std::uint8_t>(c * static_cast<int>(zp[x + sx] > 0.f));
       }
     }
   }
@@ -234,6 +243,8 @@ struct all_edges_kernel {
     edges(x, y) = b;
   }
   EDGEPLANE_HD void operator()(int x, int y) const { run(x, y, 0xffffu); }
+  /// run(), called out of line (the row kernel's rare slow path).
+  EDGEPLANE_HD EDGEPLANE_NOINLINE void run_some(int x, int y, unsigned tests) const { run(x, y, tests); }
 };
 
 /// all_edges_kernel over runs of Lanes pixels of one row (work item = row * chunks + chunk), for
@@ -274,7 +285,8 @@ struct all_edges_rows_kernel {
   // counts (cl, cr: nl and nr) and first condition do not reject.  A lane reads neighbours beyond
   // its counts (invalid depth, or pixels of other rows past the border: garbage, never used,
   // since every condition on them is masked by the counts the scalar test checks first).
-  template <class Direction, int D>
+  // Checked = false: every lane is valid with all its counts at reach (no masks needed).
+  template <class Direction, int D, bool Checked>
   EDGEPLANE_HD EDGEPLANE_INLINE void maybe_along(const float* c, int x0, int y, std::ptrdiff_t pitch,
                                                  const float* zc, const float* noise_co, const float* noise_cu,
                                                  const std::uint8_t* cl, const std::uint8_t* cr,
@@ -283,15 +295,19 @@ struct all_edges_rows_kernel {
     const std::ptrdiff_t step = static_cast<std::ptrdiff_t>(dy) * pitch + dx;
     const edge_set& s = px.set;
     const projector pr = px.proj;
-    if (s.use_jump) {  // the whole jump test, as edge_type::jump computes it
+    if (s.use_jump) {
+      // The whole jump test, as edge_type::jump computes it, without a select on floats (which
+      // g++ does not vectorize): a missing side's step is -1 there, so it never jumps, and the
+      // other side's bound is t + t_ratio * 0 = t; a present side's step is >= 0, so
+      // (d > 0 ? d : 0) is d.
       const edge_type::jump& j = s.jump;
       for (int l = 0; l < Lanes; ++l) {
         const float z = zc[l];
         const float t = j.t_abs + j.t_quad * z * z;
-        const float dl = cl[l] >= 1 ? fabsf(c[l - step] - z) : -1.f;
-        const float dr = cr[l] >= 1 ? fabsf(c[l + step] - z) : -1.f;
-        const bool jl = dl > t + j.t_ratio * (dr > 0.f ? dr : 0.f);
-        const bool jr = dr > t + j.t_ratio * (dl > 0.f ? dl : 0.f);
+        const float dl = fabsf(c[l - step] - z), dr = fabsf(c[l + step] - z);
+        const bool hl = !Checked || cl[l] >= 1, hr = !Checked || cr[l] >= 1;
+        const bool jl = hl & ((hr & (dl > t + j.t_ratio * dr)) | (!hr & (dl > t)));
+        const bool jr = hr & ((hl & (dr > t + j.t_ratio * dl)) | (!hl & (dr > t)));
         maybe[l] |= static_cast<unsigned>(jl | jr) << (4 * D);
       }
     }
@@ -301,7 +317,7 @@ struct all_edges_rows_kernel {
       for (int l = 0; l < Lanes; ++l) {
         const float z = zc[l], a = c[l - step], b = c[l + step];
         const bool nearer = (z < t * a) & (z < t * b), farther = (z * t > a) & (z * t > b);
-        maybe[l] |= static_cast<unsigned>((cl[l] >= n) & (cr[l] >= n) & (nearer | farther)) << (4 * D + 1);
+        maybe[l] |= static_cast<unsigned>((!Checked || ((cl[l] >= n) & (cr[l] >= n))) & (nearer | farther)) << (4 * D + 1);
       }
     }
     if (s.use_corner) {
@@ -311,7 +327,7 @@ struct all_edges_rows_kernel {
         const bool bend = !surely_not_farther(at<Direction>(pr, c, step, x0 + l, y, l, 0),
                                               at<Direction>(pr, c, step, x0 + l, y, l, -h),
                                               at<Direction>(pr, c, step, x0 + l, y, l, h), t, noise_co[l]);
-        maybe[l] |= static_cast<unsigned>((cl[l] >= n) & (cr[l] >= n) & bend) << (4 * D + 2);
+        maybe[l] |= static_cast<unsigned>((!Checked || ((cl[l] >= n) & (cr[l] >= n))) & bend) << (4 * D + 2);
       }
     }
     if (s.use_curved) {
@@ -324,9 +340,22 @@ struct all_edges_rows_kernel {
         const point3 mr = at<Direction>(pr, c, step, x, y, l, mid), er = at<Direction>(pr, c, step, x, y, l, n);
         const bool no_l = surely_not_farther(ml, p, el, t, noise_cu[l]);
         const bool no_r = surely_not_farther(mr, p, er, t, noise_cu[l]);
-        maybe[l] |= static_cast<unsigned>((cl[l] >= n) & (cr[l] >= n) & !(no_l & no_r)) << (4 * D + 3);
+        maybe[l] |= static_cast<unsigned>((!Checked || ((cl[l] >= n) & (cr[l] >= n))) & !(no_l & no_r)) << (4 * D + 3);
       }
     }
+  }
+
+  template <bool Checked>
+  EDGEPLANE_HD EDGEPLANE_INLINE void maybe_all(const float* c, int x0, int y, std::ptrdiff_t pitch, const float* zc,
+                                               const float* noise_co, const float* noise_cu, const std::uint8_t* cnt,
+                                               std::int64_t n, unsigned* maybe) const {
+    maybe_along<direction::horizontal, 0, Checked>(c, x0, y, pitch, zc, noise_co, noise_cu, cnt, cnt + n, maybe);
+    maybe_along<direction::vertical, 1, Checked>(c, x0, y, pitch, zc, noise_co, noise_cu, cnt + 2 * n, cnt + 3 * n,
+                                                 maybe);
+    maybe_along<direction::left_diagonal, 2, Checked>(c, x0, y, pitch, zc, noise_co, noise_cu, cnt + 4 * n,
+                                                      cnt + 5 * n, maybe);
+    maybe_along<direction::right_diagonal, 3, Checked>(c, x0, y, pitch, zc, noise_co, noise_cu, cnt + 6 * n,
+                                                       cnt + 7 * n, maybe);
   }
 
   EDGEPLANE_HD void operator()(std::int64_t item) const {
@@ -353,18 +382,20 @@ struct all_edges_rows_kernel {
       maybe[l] = 0;
     }
     const std::uint8_t* cnt = px.runs + i0;  // plane q of the counts at cnt + q * n
-    maybe_along<direction::horizontal, 0>(c, x0, y, pitch, zc, noise_co, noise_cu, cnt, cnt + n, maybe);
-    maybe_along<direction::vertical, 1>(c, x0, y, pitch, zc, noise_co, noise_cu, cnt + 2 * n, cnt + 3 * n, maybe);
-    maybe_along<direction::left_diagonal, 2>(c, x0, y, pitch, zc, noise_co, noise_cu, cnt + 4 * n, cnt + 5 * n,
-                                             maybe);
-    maybe_along<direction::right_diagonal, 3>(c, x0, y, pitch, zc, noise_co, noise_cu, cnt + 6 * n, cnt + 7 * n,
-                                              maybe);
+    int full = 1;  // every lane valid, with all its counts at reach (most runs: surface)
+    for (int l = 0; l < Lanes; ++l) full &= zc[l] > 0.f;
+    for (int q = 0; q < 8; ++q)
+      for (int l = 0; l < Lanes; ++l) full &= cnt[q * n + l] == r;
+    if (full)
+      maybe_all<false>(c, x0, y, pitch, zc, noise_co, noise_cu, cnt, n, maybe);
+    else
+      maybe_all<true>(c, x0, y, pitch, zc, noise_co, noise_cu, cnt, n, maybe);
     std::uint8_t* e = &px.edges(x0, y);
     for (int l = 0; l < Lanes; ++l) {
       if (!(zc[l] > 0.f))
         e[l] = edge_invalid;
       else if (maybe[l])
-        px.run(x0 + l, y, maybe[l]);
+        px.run_some(x0 + l, y, maybe[l]);
       else
         e[l] = 0;
     }
@@ -394,6 +425,17 @@ struct mask_dilate_kernel {
         }
     out(x, y) = v;
   }
+  template <int Lanes>  // see window_runs
+  EDGEPLANE_HD EDGEPLANE_INLINE void lanes(int x0, int y) const {
+    std::uint8_t v[Lanes] = {};
+    for (int dy = -r; dy <= r; ++dy) {
+      const std::uint8_t* row = &in(x0 - r, y + dy);
+      for (int j = 0; j <= 2 * r; ++j)
+        for (int l = 0; l < Lanes; ++l) v[l] = static_cast<std::uint8_t>(v[l] | row[j + l]);
+    }
+    std::uint8_t* o = &out(x0, y);
+    for (int l = 0; l < Lanes; ++l) o[l] = v[l] ? 1 : 0;
+  }
 };
 
 /// Binary erosion: set only where the whole window is set (pixels outside the image count as set,
@@ -415,6 +457,27 @@ struct mask_erode_kernel {
           break;
         }
     out(x, y) = v;
+  }
+  template <int Lanes>  // see window_runs; the centre is in the window
+  EDGEPLANE_HD EDGEPLANE_INLINE void lanes(int x0, int y) const {
+    std::uint8_t v[Lanes];
+    const std::uint8_t* c = &in(x0, y);
+    int any = 0;
+    for (int l = 0; l < Lanes; ++l) {
+      v[l] = c[l] != 0;
+      any |= v[l];
+    }
+    if (!any) {  // no pixel set: nothing to erode
+      for (int l = 0; l < Lanes; ++l) out(x0 + l, y) = 0;
+      return;
+    }
+    for (int dy = -r; dy <= r; ++dy) {
+      const std::uint8_t* row = &in(x0 - r, y + dy);
+      for (int j = 0; j <= 2 * r; ++j)
+        for (int l = 0; l < Lanes; ++l) v[l] = static_cast<std::uint8_t>(v[l] & (row[j + l] != 0));
+    }
+    std::uint8_t* o = &out(x0, y);
+    for (int l = 0; l < Lanes; ++l) o[l] = v[l];
   }
 };
 
@@ -474,8 +537,10 @@ void close_edges(const Backend& b, image_view<const std::uint8_t> edges, image_v
                  image_view<std::uint8_t> mask, int r) {
   detail::check_same_size(edges, mask, "edges", "mask");
   detail::check_same_size(edges, scratch, "edges", "scratch");
-  detail::for_each_pixel(b, edges.width, edges.height, detail::mask_dilate_kernel{edges, scratch, r});
-  detail::for_each_pixel(b, edges.width, edges.height, detail::mask_erode_kernel{scratch, mask, r});
+  detail::for_each_pixel_run<detail::window_runs<detail::mask_dilate_kernel>::template kernel>(
+      b, edges.width, edges.height, detail::mask_dilate_kernel{edges, scratch, r});
+  detail::for_each_pixel_run<detail::window_runs<detail::mask_erode_kernel>::template kernel>(
+      b, edges.width, edges.height, detail::mask_erode_kernel{scratch, mask, r});
 }
 
 }  // namespace edgeplane

@@ -41,6 +41,26 @@ struct depth_dilate_kernel {
     }
     out(x, y) = m;
   }
+  template <int Lanes>  // see window_runs: the same maximum, in the same order
+  EDGEPLANE_HD EDGEPLANE_INLINE void lanes(int x0, int y) const {
+    float c[Lanes], m[Lanes];
+    int holes = 0;
+    for (int l = 0; l < Lanes; ++l) {
+      c[l] = m[l] = in(x0 + l, y);
+      holes |= c[l] <= 0.f;
+    }
+    float* o = &out(x0, y);
+    if (!holes) {  // valid pixels keep their depth
+      for (int l = 0; l < Lanes; ++l) o[l] = c[l];
+      return;
+    }
+    for (int dy = -r; dy <= r; ++dy) {
+      const float* row = &in(x0 - r, y + dy);
+      for (int j = 0; j <= 2 * r; ++j)
+        for (int l = 0; l < Lanes; ++l) m[l] = row[j + l] > m[l] ? row[j + l] : m[l];
+    }
+    for (int l = 0; l < Lanes; ++l) o[l] = c[l] <= 0.f ? m[l] : c[l];
+  }
 };
 
 /// Erosion half: an originally invalid pixel takes the smallest dilated depth of its window, or
@@ -69,6 +89,33 @@ struct depth_erode_kernel {
           m = v < m ? v : m;
         }
     out(x, y) = m;
+  }
+  template <int Lanes>  // see window_runs: the same minimum, in the same order
+  EDGEPLANE_HD EDGEPLANE_INLINE void lanes(int x0, int y) const {
+    const float* z = &original(x0, y);
+    float* o = &out(x0, y);
+    int holes = 0;
+    for (int l = 0; l < Lanes; ++l) holes |= !(z[l] > 0.f);
+    if (!holes) {  // valid pixels are never changed
+      for (int l = 0; l < Lanes; ++l) o[l] = z[l];
+      return;
+    }
+    float m[Lanes];
+    int hole[Lanes];  // the window holds an invalid dilated pixel
+    for (int l = 0; l < Lanes; ++l) {
+      m[l] = 3.4e38f;
+      hole[l] = 0;
+    }
+    for (int dy = -r; dy <= r; ++dy) {
+      const float* row = &dilated(x0 - r, y + dy);
+      for (int j = 0; j <= 2 * r; ++j)
+        for (int l = 0; l < Lanes; ++l) {
+          const float v = row[j + l];
+          hole[l] |= v <= 0.f;
+          m[l] = v < m[l] ? v : m[l];
+        }
+    }
+    for (int l = 0; l < Lanes; ++l) o[l] = z[l] > 0.f ? z[l] : (hole[l] ? 0.f : m[l]);
   }
 };
 
@@ -214,8 +261,10 @@ template <class Backend>
 void close_depth(const Backend& b, image_view<float> depth, image_view<float> scratch, image_view<float> out, int r) {
   detail::check_same_size(depth, scratch, "depth", "scratch");
   detail::check_same_size(depth, out, "depth", "output");
-  detail::for_each_pixel(b, depth.width, depth.height, detail::depth_dilate_kernel{depth, scratch, r});
-  detail::for_each_pixel(b, depth.width, depth.height, detail::depth_erode_kernel{depth, scratch, out, r});
+  detail::for_each_pixel_run<detail::window_runs<detail::depth_dilate_kernel>::template kernel>(
+      b, depth.width, depth.height, detail::depth_dilate_kernel{depth, scratch, r});
+  detail::for_each_pixel_run<detail::window_runs<detail::depth_erode_kernel>::template kernel>(
+      b, depth.width, depth.height, detail::depth_erode_kernel{depth, scratch, out, r});
 }
 
 /// 2x downscale of a working depth image into out (width/2 x height/2).

@@ -125,6 +125,29 @@ struct label_dilate_kernel {
     }
     out(x, y) = v;
   }
+  template <int Lanes>  // see window_runs: the smallest nonzero label, 0 taken as 65536
+  EDGEPLANE_HD EDGEPLANE_INLINE void lanes(int x0, int y) const {
+    const std::uint16_t* c = &in(x0, y);
+    std::uint16_t* o = &out(x0, y);
+    int gaps = 0;
+    for (int l = 0; l < Lanes; ++l) gaps |= c[l] == 0;
+    if (!gaps) {  // labelled pixels keep their label
+      for (int l = 0; l < Lanes; ++l) o[l] = c[l];
+      return;
+    }
+    std::int32_t m[Lanes];
+    for (int l = 0; l < Lanes; ++l) m[l] = 0x10000;
+    for (int dy = -r; dy <= r; ++dy) {
+      const std::uint16_t* row = &in(x0 - r, y + dy);
+      for (int j = 0; j <= 2 * r; ++j)
+        for (int l = 0; l < Lanes; ++l) {
+          const std::int32_t v = row[j + l] != 0 ? std::int32_t(row[j + l]) : 0x10000;
+          m[l] = v < m[l] ? v : m[l];
+        }
+    }
+    for (int l = 0; l < Lanes; ++l)
+      o[l] = c[l] != 0 ? c[l] : static_cast<std::uint16_t>(m[l] == 0x10000 ? 0 : m[l]);
+  }
 };
 
 /// Label closing, erosion half: a pixel filled by the dilation keeps its label only if every
@@ -148,6 +171,25 @@ struct label_erode_kernel {
           break;
         }
     out(x, y) = v;
+  }
+  template <int Lanes>  // see window_runs
+  EDGEPLANE_HD EDGEPLANE_INLINE void lanes(int x0, int y) const {
+    const std::uint16_t* o0 = &original(x0, y);
+    std::uint16_t* o = &out(x0, y);
+    int filled = 0;
+    for (int l = 0; l < Lanes; ++l) filled |= o0[l] == 0;
+    if (!filled) {  // original labels are kept
+      for (int l = 0; l < Lanes; ++l) o[l] = o0[l];
+      return;
+    }
+    std::uint8_t gap[Lanes] = {};  // the window holds an unlabelled dilated pixel
+    for (int dy = -r; dy <= r; ++dy) {
+      const std::uint16_t* row = &dilated(x0 - r, y + dy);
+      for (int j = 0; j <= 2 * r; ++j)
+        for (int l = 0; l < Lanes; ++l) gap[l] = static_cast<std::uint8_t>(gap[l] | (row[j + l] == 0));
+    }
+    const std::uint16_t* d = &dilated(x0, y);
+    for (int l = 0; l < Lanes; ++l) o[l] = o0[l] != 0 ? o0[l] : (gap[l] ? std::uint16_t(0) : d[l]);
   }
 };
 

@@ -1,0 +1,75 @@
+// The host row kernels of the closings (detail::window_runs: 16 pixels of a row at once where their
+// windows lie inside the image) must give exactly what the per-pixel kernels give, which the device
+// backend runs.  Random images with many zeros (invalid depth, unlabelled pixels, empty mask), sizes
+// that are not multiples of 16, and every radius the closings use.
+#include <doctest/doctest.h>
+
+#include <cstdint>
+#include <cstring>
+#include <vector>
+
+#include "edgeplane/edges/detect_edges.hpp"
+#include "edgeplane/filters/depth.hpp"
+#include "edgeplane/labels/label_ops.hpp"
+#include "support/test_backends.hpp"
+
+using namespace edgeplane;
+using namespace edgeplane_test;
+
+namespace {
+
+constexpr int w = 83, h = 41;
+
+// Runs the per-pixel kernel make(out) pixel by pixel and the row kernel through
+// for_each_pixel_run (host: runs of 16); returns how many output elements differ byte for byte.
+template <class T, class Make>
+int differ(Make make) {
+  std::vector<T> a(static_cast<std::size_t>(w) * h, T(7)), b(a.size(), T(9));
+  const auto pa = make(make_view(a.data(), w, h));
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) pa(x, y);
+  const auto pb = make(make_view(b.data(), w, h));
+  using K = decltype(pb);
+  detail::for_each_pixel_run<detail::window_runs<K>::template kernel>(cpu{}, w, h, pb);
+  int n = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) n += std::memcmp(&a[i], &b[i], sizeof(T)) != 0;
+  return n;
+}
+
+template <class T>
+std::vector<T> random_image(lcg_noise& g, double zero_share, T lo, T hi) {
+  std::vector<T> v(static_cast<std::size_t>(w) * h);
+  for (T& e : v)
+    e = g.uniform01() < zero_share ? T(0) : static_cast<T>(lo + (hi - lo) * g.uniform01());
+  return v;
+}
+
+}  // namespace
+
+TEST_CASE("window_runs: the closings' row kernels equal their per-pixel kernels") {
+  lcg_noise g(3);
+  for (const double zeros : {0.05, 0.4, 0.9}) {
+    CAPTURE(zeros);
+    const auto depth = random_image<float>(g, zeros, 0.5f, 4.f);
+    const auto dilated = random_image<float>(g, zeros / 3, 0.5f, 4.f);
+    const auto labels = random_image<std::uint16_t>(g, zeros, 1, 7);
+    const auto ldil = random_image<std::uint16_t>(g, zeros / 3, 1, 7);
+    auto mask = random_image<std::uint8_t>(g, zeros, 1, 30);
+    const auto zv = make_view<const float>(depth.data(), w, h), dv = make_view<const float>(dilated.data(), w, h);
+    const auto lv = make_view<const std::uint16_t>(labels.data(), w, h);
+    const auto ldv = make_view<const std::uint16_t>(ldil.data(), w, h);
+    const auto mv = make_view<const std::uint8_t>(mask.data(), w, h);
+    for (const int r : {1, 2, 3}) {
+      CAPTURE(r);
+      CHECK(differ<float>([&](image_view<float> o) { return detail::depth_dilate_kernel{zv, o, r}; }) == 0);
+      CHECK(differ<float>([&](image_view<float> o) { return detail::depth_erode_kernel{zv, dv, o, r}; }) == 0);
+      CHECK(differ<std::uint16_t>([&](image_view<std::uint16_t> o) { return detail::label_dilate_kernel{lv, o, r}; }) ==
+            0);
+      CHECK(differ<std::uint16_t>(
+                [&](image_view<std::uint16_t> o) { return detail::label_erode_kernel{lv, ldv, o, r}; }) == 0);
+      CHECK(differ<std::uint8_t>([&](image_view<std::uint8_t> o) { return detail::mask_dilate_kernel{mv, o, r}; }) ==
+            0);
+      CHECK(differ<std::uint8_t>([&](image_view<std::uint8_t> o) { return detail::mask_erode_kernel{mv, o, r}; }) == 0);
+    }
+  }
+}
