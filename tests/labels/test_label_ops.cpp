@@ -101,6 +101,51 @@ TEST_CASE_TEMPLATE("grow_kernel: a pixel on the plane joins, one off it does not
   }
 }
 
+// Host backends grow by rows (detail::grow_rows_kernel), skipping rows whose neighbourhood the
+// previous round left unchanged; the result after every round must be the per-pixel rounds'.
+TEST_CASE("grow_rows_kernel: rounds that skip unchanged rows equal full rounds") {
+  const int w = 37, h = 90;
+  std::vector<float> depth(static_cast<std::size_t>(w) * h, 2.0f);  // the plane z = 2
+  for (int x = 0; x < w; ++x) depth[at(w, x, 45)] = 0.f;  // an invalid row: growth stops there...
+  depth[at(w, 20, 45)] = 2.0f;                            // ...but for one gap
+  for (int y = 60; y < 90; ++y) depth[at(w, 5, y)] = 2.1f;  // a ridge off the plane
+  std::vector<std::uint16_t> start(depth.size(), 0);
+  for (int x = 0; x < 4; ++x) start[at(w, x, 2)] = 1;  // two seeds far apart
+  start[at(w, 30, 80)] = 2;
+  const std::vector<float> planes = {0, 0, 0, 0, 0, 0, -1, 2, 0, 0, -1, 2};
+  const std::vector<float> caps(3, 1e9f);
+  const params p = presets::thesis_full();
+  std::vector<std::uint16_t> a = start, b1 = start, b2(start.size(), 0);  // b1, b2: the two buffers
+  std::vector<std::int32_t> rows(2 * (static_cast<std::size_t>(h) + 2), 0);
+  std::int32_t flag = 0;
+  const cpu b{};
+  int skipped_rounds = 0;
+  for (int it = 0; it < 60; ++it) {
+    CAPTURE(it);
+    std::vector<std::uint16_t> next(a.size());
+    const detail::grow_kernel full{make_view<const float>(depth.data(), w, h), make_view<const std::uint16_t>(a.data(), w, h),
+                                   make_view(next.data(), w, h), detail::make_projector(camera(w, h)),
+                                   detail::make_noise(p.noise), p.grow_k, planes.data(), caps.data(), &flag};
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) full(x, y);
+    a = next;
+    std::vector<std::uint16_t>& in = it % 2 == 0 ? b1 : b2;
+    std::vector<std::uint16_t>& out = it % 2 == 0 ? b2 : b1;
+    const detail::grow_kernel g{make_view<const float>(depth.data(), w, h), make_view<const std::uint16_t>(in.data(), w, h),
+                                make_view(out.data(), w, h), detail::make_projector(camera(w, h)),
+                                detail::make_noise(p.noise), p.grow_k, planes.data(), caps.data(), &flag};
+    const std::size_t hp = static_cast<std::size_t>(h) + 2;
+    b.for_each_index(h, detail::grow_rows_kernel{g, rows.data() + (it % 2) * hp, rows.data() + (1 - it % 2) * hp, it == 0});
+    REQUIRE(out == a);
+    int changed_rows = 0;
+    for (std::size_t y = 1; y <= static_cast<std::size_t>(h); ++y) changed_rows += rows[(1 - it % 2) * hp + y];
+    skipped_rounds += changed_rows > 0 && changed_rows < h - 10;
+  }
+  CHECK(a[at(w, 36, 89)] == 2);  // growth reached the far corner...
+  CHECK(a[at(w, 0, 44)] == 1);   // ...and both sides of the invalid row
+  CHECK(skipped_rounds > 10);    // and most rounds skipped rows
+}
+
 TEST_CASE_TEMPLATE("grow_kernel: a pixel between two regions takes the nearer plane", B, EDGEPLANE_TEST_BACKENDS) {
   const int w = 9, h = 3;
   // Left region (label 1): the plane z = 2.000; right region (label 2): the plane z = 2.010.  The

@@ -64,6 +64,31 @@ struct grow_kernel {
   }
 };
 
+/// Host form of a grow_kernel round, one work item per row y.  A round changes a row only if the
+/// round before changed it or a row next to it (the rows it reads): `prev` flags the rows the
+/// previous round changed (row y at prev[y + 1]; prev[0] and prev[h + 1] are 0), and rows with no
+/// flag among y - 1 .. y + 1 are skipped, since their output buffer, written two rounds ago,
+/// already holds them.  `cur` receives this round's flags; `all` (the first round) runs every row.
+struct grow_rows_kernel {
+  grow_kernel px;
+  const std::int32_t* prev;
+  std::int32_t* cur;
+  bool all;
+  EDGEPLANE_HD void operator()(std::int64_t row) const {
+    const int y = static_cast<int>(row);
+    if (!all && !(prev[y] | prev[y + 1] | prev[y + 2])) {
+      cur[y + 1] = 0;
+      return;
+    }
+    int any = 0;
+    for (int x = 0; x < px.in.width; ++x) {
+      px(x, y);
+      any |= px.out(x, y) != px.in(x, y);
+    }
+    cur[y + 1] = any;
+  }
+};
+
 /// Sweep form of plane-guided growth: work item i walks one whole row (Axis 0) or column (Axis 1)
 /// forward, then backward, in place; an unlabelled pixel with valid depth takes the label of the
 /// pixel just before it on the walk when its point lies within k * sigma(z) and cap[l] of that
