@@ -65,23 +65,6 @@ EDGEPLANE_HD EDGEPLANE_INLINE bool farther_than(point3 p, point3 a, point3 b, fl
   return sqrtf(d2) > t * sqrtf(l2) + noise;            // sqrtf(l2) = norm(b - a), the same operations
 }
 
-/// !(sqrtf(dist2_to_line(p, a, b)) > bound), with exactly the float operations of that expression
-/// whenever the answer is in doubt, but answering "yes" without a square root or a division when
-/// num < l2 bound^2 (1 - 1e-4) (num, l2 as in farther_than): then the distance is below bound by a
-/// relative margin of 5e-5, far beyond the few float roundings of either side (each at most 2^-24
-/// relative; the quantities compared are normal floats under the guards: l2 >= 1e-12 m^2,
-/// 1e-20 <= bound^2 < 1e30, num < 1e30), so the exact expression says "within" too.
-EDGEPLANE_HD EDGEPLANE_INLINE bool within_bound(point3 p, point3 a, point3 b, float bound) {
-  const point3 ab = b - a, ap = p - a;
-  const float l2 = dot(ab, ab);
-  const point3 c = cross(ap, ab);
-  const float num = dot(c, c);
-  const float bb = bound * bound;
-  if (l2 >= 1e-12f && bb >= 1e-20f && bb < 1e30f && num < 1e30f && num < l2 * bb * 0.9999f) return true;
-  const float d2 = l2 <= 0.f ? dot(ap, ap) : num / l2;  // = dist2_to_line(p, a, b), the same operations
-  return !(sqrtf(d2) > bound);
-}
-
 EDGEPLANE_HD EDGEPLANE_INLINE bool valid_depth(float z) { return z > 0.f; }
 
 /// |n . p + d| for plane l of a table holding nx, ny, nz, d per plane (metres).

@@ -68,13 +68,12 @@ EDGEPLANE_HD EDGEPLANE_INLINE void gather_along(neighbourhood& nb, image_view<co
 /// Whether the arm's inner points 1..m-1 on side s all lie within t * chord + noise of the chord
 /// c -> P_m: the same decision as comparing their largest distance with that bound (sqrtf is
 /// monotonic, so the largest distance exceeds it exactly when one point's does), but the scan stops
-/// at the first point beyond it, and a point clearly within it needs no square root
-/// (detail::within_bound).
+/// at the first point beyond it.
 EDGEPLANE_HD EDGEPLANE_INLINE bool arm_within(const neighbourhood& nb, int s, int m, float t, float noise) {
   const point3 c = nb.center(), e = nb.side(s, m);
   const float bound = t * norm(e - c) + noise;
   for (int k = 1; k < m; ++k)
-    if (!within_bound(nb.side(s, k), c, e, bound)) return false;
+    if (sqrtf(dist2_to_line(nb.side(s, k), c, e)) > bound) return false;
   return true;
 }
 
