@@ -60,6 +60,29 @@ struct count_roots_kernel {
     if (r >= 0) atomic_add(count + r, 1);
   }
 };
+/// Host form of count_roots_kernel: one work item per block of `block` elements, one atomic add
+/// per run of elements with the same root (a component's pixels come in long runs), so the two
+/// threads of a small machine do not take turns on one counter for every pixel.
+struct count_roots_blocks_kernel {
+  const std::int32_t* parent;
+  std::int32_t* count;
+  std::int64_t n;
+  int block;
+  EDGEPLANE_HD void operator()(std::int64_t item) const {
+    const std::int64_t i0 = item * block, i1 = i0 + block < n ? i0 + block : n;
+    std::int32_t cur = -1, run = 0;
+    for (std::int64_t i = i0; i < i1; ++i) {
+      const std::int32_t r = parent[i];
+      if (r != cur) {
+        if (cur >= 0) atomic_add(count + cur, run);
+        cur = r;
+        run = 0;
+      }
+      ++run;
+    }
+    if (cur >= 0) atomic_add(count + cur, run);
+  }
+};
 struct flag_candidates_kernel {
   const std::int32_t* parent;
   const std::int32_t* count;
@@ -239,7 +262,12 @@ class segmenter {
   // them 1, 2, ... in raster order of their roots (scan_); returns how many.
   std::int32_t flag_components(std::int64_t n, std::int32_t min_size) {
     b_.memset(count_.data(), 0, sizeof(std::int32_t) * n);
-    b_.for_each_index(n, detail::count_roots_kernel{parent_.data(), count_.data()});
+    if constexpr (Backend::host_accessible) {
+      constexpr int block = 1024;
+      b_.for_each_index((n + block - 1) / block, detail::count_roots_blocks_kernel{parent_.data(), count_.data(), n, block});
+    } else {
+      b_.for_each_index(n, detail::count_roots_kernel{parent_.data(), count_.data()});
+    }
     b_.for_each_index(n, detail::flag_candidates_kernel{parent_.data(), count_.data(), min_size, flags_.data()});
     b_.inclusive_scan(flags_.data(), n, scan_.data());
     std::int32_t k = 0;  // the scan's last element is the number of components kept

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "edgeplane/labels/union_find.hpp"
+#include "edgeplane/segmenter.hpp"
 #include "support/test_backends.hpp"
 
 using namespace edgeplane;
@@ -355,4 +356,28 @@ TEST_CASE_TEMPLATE("erode_failed: the separable erosion marks exactly the pixels
       CHECK(active > 0);  // not vacuous
     }
   }
+}
+
+// The segmenter counts each component's elements; host backends count by runs of equal roots in
+// blocks (detail::count_roots_blocks_kernel) instead of one atomic add per element.
+TEST_CASE("count_roots_blocks_kernel counts as count_roots_kernel does") {
+  lcg_noise g(23);
+  const std::int64_t n = 5000;
+  std::vector<std::int32_t> parent(static_cast<std::size_t>(n));
+  std::int32_t root = 0;
+  for (std::int64_t i = 0; i < n; ++i) {  // runs of roots, some inactive (-1), roots repeating
+    if (g.uniform01() < 0.05) root = static_cast<std::int32_t>(g.next_u32(static_cast<std::uint32_t>(n)));
+    parent[static_cast<std::size_t>(i)] = g.uniform01() < 0.1 ? -1 : root;
+  }
+  std::vector<std::int32_t> a(static_cast<std::size_t>(n), 0), b(a);
+  const cpu c{};
+  c.for_each_index(n, detail::count_roots_kernel{parent.data(), a.data()});
+  for (const int block : {1, 7, 1024})
+    for (const cpu::mode m : {cpu::mode::serial, cpu::mode::parallel}) {
+      std::fill(b.begin(), b.end(), 0);
+      const cpu cb{m};
+      cb.for_each_index((n + block - 1) / block, detail::count_roots_blocks_kernel{parent.data(), b.data(), n, block});
+      CHECK(a == b);
+    }
+  CHECK(std::count_if(a.begin(), a.end(), [](std::int32_t k) { return k > 0; }) > 50);
 }
