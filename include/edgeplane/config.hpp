@@ -89,7 +89,7 @@ void for_each_pixel_run(const Backend& b, int w, int h, const Pixel& px) {
   }
 }
 
-/// Host row kernels of windowed pixel kernels (closings): px.lanes<Lanes>(x0, y) computes pixels
+/// Host row kernels of windowed pixel kernels (smoothing, closings): px.lanes<Lanes>(x0, y) computes pixels
 /// x0 .. x0 + Lanes - 1 of row y at once where all their (2 px.r + 1)^2 windows lie inside the
 /// image (px.out's size), and must give exactly what px(x, y) gives; px(x, y) runs elsewhere.
 /// Use as for_each_pixel_run<window_runs<Px>::template kernel>.

@@ -207,8 +207,8 @@ TEST_CASE_TEMPLATE("smooth_depth: reduces noise on a plane and keeps a depth ste
   }
 }
 
-// The host backends smooth runs of 16 pixels at once (detail::smooth_rows_kernel); the device
-// backend runs detail::smooth_kernel per pixel.  Both must give the same floats, bit for bit, at
+// The host backends smooth runs of 16 pixels at once (detail::smooth_kernel::lanes, through
+// detail::window_runs); the device backend runs detail::smooth_kernel per pixel.  Both must give the same floats, bit for bit, at
 // borders, around invalid pixels and for widths that are not multiples of 16.
 TEST_CASE("smooth_depth: the 16-pixel row kernel equals the per-pixel kernel bit for bit") {
   lcg_noise noise(11);

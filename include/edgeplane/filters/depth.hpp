@@ -186,35 +186,21 @@ struct smooth_kernel {
         }
     out(x, y) = s / static_cast<float>(n);
   }
-};
-
-/// smooth_kernel over runs of Lanes pixels of one row (work item = row * chunks + chunk): where
-/// the whole run's windows lie inside the image, the lanes advance together through the window
-/// (each lane's sum in the same order as smooth_kernel's, so the results are bit-identical), which
-/// breaks the one-add-after-another chain of a single pixel and lets the compiler use SIMD.  Runs
-/// near the border fall back to smooth_kernel pixel by pixel.
-template <int Lanes>
-struct smooth_rows_kernel {
-  smooth_kernel px;
-  int chunks;  // runs per row: ceil(width / Lanes)
-  EDGEPLANE_HD void operator()(std::int64_t item) const {
-    const int y = static_cast<int>(item / chunks), x0 = static_cast<int>(item % chunks) * Lanes;
-    const int w = px.in.width, r = px.r;
-    if (x0 < r || x0 + Lanes > w - r || y < r || y >= px.in.height - r) {
-      const int x1 = x0 + Lanes < w ? x0 + Lanes : w;
-      for (int x = x0; x < x1; ++x) px(x, y);
-      return;
-    }
+  /// Host runs of Lanes pixels (see window_runs): the lanes advance together through the window,
+  /// each lane's sum in the same order as above (bit-identical), which breaks the
+  /// one-add-after-another chain of a single pixel and lets the compiler use SIMD.
+  template <int Lanes>
+  EDGEPLANE_HD EDGEPLANE_INLINE void lanes(int x0, int y) const {
     float zc[Lanes], tol[Lanes], sum[Lanes], cnt[Lanes];  // counts as floats: exact, and one vector type
-    const float* c = &px.in(x0, y);
+    const float* c = &in(x0, y);
     for (int l = 0; l < Lanes; ++l) {
       zc[l] = c[l];
-      tol[l] = px.k * (px.s0 + px.s2 * zc[l] * zc[l]);
+      tol[l] = k * (s0 + s2 * zc[l] * zc[l]);
       sum[l] = 0.f;
       cnt[l] = 0.f;
     }
     for (int dy = -r; dy <= r; ++dy) {
-      const float* row = &px.in(x0 - r, y + dy);
+      const float* row = &in(x0 - r, y + dy);
       for (int j = 0; j <= 2 * r; ++j)
         for (int l = 0; l < Lanes; ++l) {
           const float z = row[j + l];
@@ -224,7 +210,7 @@ struct smooth_rows_kernel {
           cnt[l] += m;
         }
     }
-    float* o = &px.out(x0, y);
+    float* o = &out(x0, y);
     for (int l = 0; l < Lanes; ++l) o[l] = (zc[l] > 0.f && cnt[l] > 0.f) ? sum[l] / cnt[l] : 0.f;
   }
 };
@@ -236,8 +222,8 @@ template <class Backend>
 void smooth_depth(const Backend& b, image_view<const float> in, image_view<float> out, int r, float k,
                   float sigma0, float sigma2) {
   detail::check_same_size(in, out, "depth", "smoothed depth");
-  detail::for_each_pixel_run<detail::smooth_rows_kernel>(b, in.width, in.height,
-                                                         detail::smooth_kernel{in, out, r, k, sigma0, sigma2});
+  detail::for_each_pixel_run<detail::window_runs<detail::smooth_kernel>::template kernel>(
+      b, in.width, in.height, detail::smooth_kernel{in, out, r, k, sigma0, sigma2});
 }
 
 /// Converts raw uint16 depth (scale = metres per unit) or float metres (scale 1) into a working
