@@ -237,14 +237,16 @@ class segmenter {
     return ms;
   }
 
-  // Downloads the moment blocks of labels 1..n and fits each (host).
-  void download_fits(std::int32_t n, std::vector<plane_fit>& fits) {
+  // Downloads the moment blocks of labels first+1..n and fits each (host); the blocks and fits of
+  // labels 1..first stay as they are.
+  void download_fits(std::int32_t n, std::vector<plane_fit>& fits, std::int32_t first = 0) {
     host_moments_.resize(static_cast<std::size_t>(n + 1) * moment_slots);
     host_bbox_.resize(static_cast<std::size_t>(n + 1) * 4);
-    b_.copy_to_host(host_moments_.data(), moments_.data(), host_moments_.size() * sizeof(std::uint64_t));
-    b_.copy_to_host(host_bbox_.data(), bbox_.data(), host_bbox_.size() * sizeof(std::int32_t));
+    const std::size_t m0 = static_cast<std::size_t>(first + 1) * moment_slots, b0 = static_cast<std::size_t>(first + 1) * 4;
+    b_.copy_to_host(host_moments_.data() + m0, moments_.data() + m0, (host_moments_.size() - m0) * sizeof(std::uint64_t));
+    b_.copy_to_host(host_bbox_.data() + b0, bbox_.data() + b0, (host_bbox_.size() - b0) * sizeof(std::int32_t));
     fits.resize(static_cast<std::size_t>(n));
-    for (std::int32_t c = 1; c <= n; ++c)
+    for (std::int32_t c = first + 1; c <= n; ++c)
       fits[c - 1] = fit_plane(host_moments_.data() + static_cast<std::size_t>(c) * moment_slots,
                               host_bbox_.data() + static_cast<std::size_t>(c) * 4);
   }
@@ -275,12 +277,14 @@ class segmenter {
     return k;
   }
 
-  void refit_candidates(image_view<const float> z, const intrinsics& kp, std::int32_t num) {
+  // Fits candidates first+1..num from their pixels; those of 1..first keep their fits (a split
+  // round writes its new ids only over pixels of retired candidates, so the others are unchanged).
+  void refit_candidates(image_view<const float> z, const intrinsics& kp, std::int32_t num, std::int32_t first = 0) {
     moments_.resize(static_cast<std::size_t>(num + 1) * moment_slots);
     bbox_.resize(static_cast<std::size_t>(num + 1) * 4);
-    accumulate_moments(b_, z, kp, detail::candidate_image_labels{view(cand_.data(), pw_, ph_)}, num, moments_.data(),
-                       bbox_.data());
-    download_fits(num, fits_);
+    accumulate_moments(b_, z, kp, detail::candidate_image_labels{view(cand_.data(), pw_, ph_), first}, num,
+                       moments_.data(), bbox_.data());
+    download_fits(num, fits_, first);
   }
 
   template <class In>
@@ -411,8 +415,8 @@ class segmenter {
                            parent_.data());
       const std::int32_t added = number_components(n, num_cand, true);
       if (added == 0) break;
+      refit_candidates(z, kp, num_cand + added, num_cand);
       num_cand += added;
-      refit_candidates(z, kp, num_cand);
       for (int c = num_cand - added; c < num_cand; ++c) status_.push_back(is_plane(fits_[c], p_) ? 1 : 0);
     }
     out.candidates = num_cand;

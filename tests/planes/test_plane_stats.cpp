@@ -225,3 +225,84 @@ TEST_CASE("fixed_point_max_depth: hundreds of metres for real cameras, nothing f
     CHECK(double(w) * h * coord * coord <= std::ldexp(1.0, 62));
   }
 }
+
+TEST_CASE_TEMPLATE("accumulate_moments: long runs (the host's 8-pixel lanes) give every slot and box of a plain loop", B,
+                   EDGEPLANE_TEST_BACKENDS) {
+  // Runs of one label far longer than 8 pixels, starting and ending at every offset of a chunk,
+  // with invalid depth inside runs, negative coordinates (left of and above the centre) and a
+  // width that is not a multiple of 8; candidate_image_labels with `above` drops the low ids.
+  const int w = 157, h = 23, num = 5;
+  const auto k = camera(w, h);
+  auto depth = plane_image(k, w, h, normalized({0.2, -0.4, -1.0}), 2.6);
+  lcg_noise noise(4);
+  for (auto& z : depth) z += noise(0.003f);
+  std::vector<std::int32_t> cand(depth.size(), 0);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const std::size_t i = static_cast<std::size_t>(y) * w + x;
+      const int run = (x + 3 * y) / (17 + y % 13);  // runs of 17..29 pixels, shifted per row
+      cand[i] = (run + y) % (num + 1);              // 0 = no label, also runs of no label
+      if ((x * 7 + y * 3) % 41 == 0) depth[i] = 0.f;  // a hole inside a run
+    }
+  const auto proj = detail::make_projector(k);
+  for (const std::int32_t above : {0, 2}) {
+    CAPTURE(above);
+    std::vector<std::int64_t> ref(static_cast<std::size_t>(num + 1) * moment_slots, 0);
+    std::vector<std::int32_t> ref_bb;
+    for (int l = 0; l <= num; ++l) ref_bb.insert(ref_bb.end(), {0x7fffffff, 0x7fffffff, -1, -1});
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        const std::size_t i = static_cast<std::size_t>(y) * w + x;
+        const int l = cand[i] > above ? cand[i] : 0;
+        if (l == 0) continue;
+        std::int64_t* s = ref.data() + static_cast<std::size_t>(l) * moment_slots;
+        std::int32_t* bb = ref_bb.data() + 4 * l;
+        bb[0] = std::min(bb[0], x);
+        bb[1] = std::min(bb[1], y);
+        bb[2] = std::max(bb[2], x);
+        bb[3] = std::max(bb[3], y);
+        s[10] += 1;
+        if (!(depth[i] > 0.f)) continue;
+        const auto p = proj(x, y, depth[i]);
+        const std::int64_t q[3] = {std::llrint(double(p.x) * fixed_per_metre), std::llrint(double(p.y) * fixed_per_metre),
+                                   std::llrint(double(p.z) * fixed_per_metre)};
+        s[0] += 1;
+        for (int j = 0; j < 3; ++j) s[1 + j] += q[j];
+        s[4] += q[0] * q[0];
+        s[5] += q[0] * q[1];
+        s[6] += q[0] * q[2];
+        s[7] += q[1] * q[1];
+        s[8] += q[1] * q[2];
+        s[9] += q[2] * q[2];
+      }
+    bool neg_x = false, neg_y = false;  // some sums of coordinates are negative
+    for (int l = 1; l <= num; ++l) {
+      neg_x |= ref[static_cast<std::size_t>(l) * moment_slots + 1] < 0;
+      neg_y |= ref[static_cast<std::size_t>(l) * moment_slots + 2] < 0;
+    }
+    if (above == 0) {
+      CHECK(neg_x);
+      CHECK(neg_y);
+    }
+    for (const B& b : variants<B>()) {
+      CAPTURE(variant_name(b));
+      device_array<float, B> z(b, depth);
+      device_array<std::int32_t, B> c(b, cand);
+      device_array<std::uint64_t, B> m(b, static_cast<std::size_t>(num + 1) * moment_slots, 777);
+      device_array<std::int32_t, B> bb(b, static_cast<std::size_t>(num + 1) * 4, 777);
+      accumulate_moments(b, z.cview(w, h), k, detail::candidate_image_labels{c.cview(w, h), above}, num, m.data(),
+                         bb.data());
+      const auto got = m.host();
+      const auto got_bb = bb.host();
+      for (int l = 1; l <= num; ++l) {
+        CAPTURE(l);
+        for (int j = 0; j < moment_slots; ++j) {
+          CAPTURE(j);
+          CHECK(static_cast<std::int64_t>(got[static_cast<std::size_t>(l) * moment_slots + j]) ==
+                ref[static_cast<std::size_t>(l) * moment_slots + j]);
+        }
+        for (int j = 0; j < 4; ++j) CHECK(got_bb[4 * l + j] == ref_bb[4 * l + j]);
+      }
+    }
+  }
+}

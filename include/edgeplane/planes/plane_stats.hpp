@@ -6,6 +6,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <string>
 #include <vector>
 
@@ -43,10 +44,15 @@ inline float fixed_point_max_depth(const intrinsics& k, int w, int h) {
 
 namespace detail {
 
-/// Labels from a candidate-id image (int32, 0 = none).
+/// Labels from a candidate-id image (int32, 0 = none); ids up to `above` count as none (a split
+/// round refits only the candidates it added).
 struct candidate_image_labels {
   image_view<const std::int32_t> cand;
-  EDGEPLANE_HD std::int32_t operator()(int x, int y) const { return cand(x, y); }
+  std::int32_t above = 0;
+  EDGEPLANE_HD std::int32_t operator()(int x, int y) const {
+    const std::int32_t c = cand(x, y);
+    return c > above ? c : 0;
+  }
 };
 
 /// Inliers of merged candidates: pixel i counts for plane g = table[cand(i)] only when its point
@@ -76,8 +82,28 @@ struct image_labels {
   EDGEPLANE_HD std::int32_t operator()(int x, int y) const { return labels(x, y); }
 };
 
+/// llrint(double(v) * fixed_per_metre): the fixed-point coordinate of v metres.  On the host it is
+/// computed without the library call (which g++ does not inline, and which keeps the loop scalar):
+/// adding 1.5 * 2^52 rounds s = v * 1e4 to an integer in the current rounding mode, exactly as
+/// llrint does, and for |s| < 2^51 the sum's bit pattern minus that of 1.5 * 2^52 is the integer.
+/// fixed_point_max_depth keeps every coordinate far below 2^51 units (2^31 at most); the two
+/// operations stay separate (the library compiles with -ffp-contract=off).
+EDGEPLANE_HD EDGEPLANE_INLINE std::int64_t to_fixed(float v) {
+#if defined(__CUDA_ARCH__)
+  return static_cast<std::int64_t>(llrint(static_cast<double>(v) * fixed_per_metre));
+#else
+  const double r = static_cast<double>(v) * fixed_per_metre + 0x1.8p52;
+  std::uint64_t bits;
+  std::memcpy(&bits, &r, sizeof bits);
+  return static_cast<std::int64_t>(bits - 0x4338000000000000ull);
+#endif
+}
+
 /// One work item per row: accumulates the moments of consecutive pixels of one label locally and
 /// flushes them with atomic adds when the label changes (a row holds few runs, so few atomics).
+/// Sums are kept as uint64 (two's complement: wrapping, so the order of additions cannot matter,
+/// and the totals fit an int64 by fixed_point_max_depth).  On the host, runs of 8 pixels of the
+/// current label are summed lane by lane (vectorizable); the lanes are folded in at each flush.
 template <class Labels>
 struct moments_kernel {
   image_view<const float> depth;
@@ -87,11 +113,13 @@ struct moments_kernel {
   std::uint64_t* moments;  // (num_labels + 1) * moment_slots; slot block of label L at L * moment_slots
   std::int32_t* bbox;      // (num_labels + 1) * 4
 
-  EDGEPLANE_HD void flush(std::int32_t l, const std::int64_t* s, int x0, int x1, int y) const {
+  static constexpr int lanes = 8;
+
+  EDGEPLANE_HD void flush(std::int32_t l, const std::uint64_t* s, int x0, int x1, int y) const {
     if (l <= 0 || l > num_labels) return;
     std::uint64_t* m = moments + static_cast<std::int64_t>(l) * moment_slots;
     for (int k = 0; k < moment_slots; ++k)
-      if (s[k] != 0) atomic_add(m + k, static_cast<std::uint64_t>(s[k]));
+      if (s[k] != 0) atomic_add(m + k, s[k]);
     std::int32_t* bb = bbox + static_cast<std::int64_t>(l) * 4;
     atomic_min(bb + 0, x0);
     atomic_min(bb + 1, y);
@@ -99,38 +127,96 @@ struct moments_kernel {
     atomic_max(bb + 3, y);
   }
 
+  // pixel (x, y) of label l > 0 into the sums s
+  EDGEPLANE_HD EDGEPLANE_INLINE void add(std::uint64_t* s, int x, int y) const {
+    s[10] += 1;
+    const float z = depth(x, y);
+    if (!(z > 0.f)) return;
+    const point3 p = proj(x, y, z);
+    const auto px = static_cast<std::uint64_t>(to_fixed(p.x)), py = static_cast<std::uint64_t>(to_fixed(p.y)),
+               pz = static_cast<std::uint64_t>(to_fixed(p.z));
+    s[0] += 1;
+    s[1] += px;
+    s[2] += py;
+    s[3] += pz;
+    s[4] += px * px;
+    s[5] += px * py;
+    s[6] += px * pz;
+    s[7] += py * py;
+    s[8] += py * pz;
+    s[9] += pz * pz;
+  }
+
+  // pixel x of the scalar path: flushes the run that ends before it when its label differs
+  EDGEPLANE_HD EDGEPLANE_INLINE void step(std::uint64_t* s, std::int32_t& cur, int& x0, std::int32_t l, int x,
+                                          int y) const {
+    if (l != cur) {
+      flush(cur, s, x0, x - 1, y);
+      for (int k = 0; k < moment_slots; ++k) s[k] = 0;
+      cur = l;
+      x0 = x;
+    }
+    if (l > 0) add(s, x, y);
+  }
+
   EDGEPLANE_HD void operator()(std::int64_t row) const {
     const int y = static_cast<int>(row), w = depth.width;
-    std::int64_t s[moment_slots] = {};
+    std::uint64_t s[moment_slots] = {};
     std::int32_t cur = 0;
-    int x0 = 0;
-    for (int x = 0; x < w; ++x) {
-      const std::int32_t l = label_of(x, y);
-      if (l != cur) {
-        flush(cur, s, x0, x - 1, y);
-        for (int k = 0; k < moment_slots; ++k) s[k] = 0;
-        cur = l;
-        x0 = x;
+    int x0 = 0, x = 0;
+#if !defined(__CUDA_ARCH__)
+    // Lane sums of the current run (slots 0..9; slot 10 counts whole chunks in s directly).
+    std::uint64_t a[10][lanes] = {};
+    bool lanes_used = false;
+    auto fold = [&] {
+      if (!lanes_used) return;
+      for (int k = 0; k < 10; ++k)
+        for (int l = 0; l < lanes; ++l) {
+          s[k] += a[k][l];
+          a[k][l] = 0;
+        }
+      lanes_used = false;
+    };
+    for (; x + lanes <= w; x += lanes) {
+      std::int32_t lab[lanes];
+      bool same = true;
+      for (int l = 0; l < lanes; ++l) {
+        lab[l] = label_of(x + l, y);
+        same &= lab[l] == cur;
       }
-      if (l <= 0) continue;
-      s[10] += 1;
-      const float z = depth(x, y);
-      if (!(z > 0.f)) continue;
-      const point3 p = proj(x, y, z);
-      const std::int64_t px = static_cast<std::int64_t>(llrint(static_cast<double>(p.x) * fixed_per_metre));
-      const std::int64_t py = static_cast<std::int64_t>(llrint(static_cast<double>(p.y) * fixed_per_metre));
-      const std::int64_t pz = static_cast<std::int64_t>(llrint(static_cast<double>(p.z) * fixed_per_metre));
-      s[0] += 1;
-      s[1] += px;
-      s[2] += py;
-      s[3] += pz;
-      s[4] += px * px;
-      s[5] += px * py;
-      s[6] += px * pz;
-      s[7] += py * py;
-      s[8] += py * pz;
-      s[9] += pz * pz;
+      if (same) {
+        if (cur <= 0) continue;
+        const float* zr = &depth(x, y);
+        for (int l = 0; l < lanes; ++l) {
+          const float z = zr[l];
+          const std::uint64_t m = static_cast<std::uint64_t>(0) - static_cast<std::uint64_t>(z > 0.f);
+          const point3 p = proj(x + l, y, z);
+          const std::uint64_t px = static_cast<std::uint64_t>(to_fixed(p.x)) & m,
+                              py = static_cast<std::uint64_t>(to_fixed(p.y)) & m,
+                              pz = static_cast<std::uint64_t>(to_fixed(p.z)) & m;
+          a[0][l] += m & 1u;
+          a[1][l] += px;
+          a[2][l] += py;
+          a[3][l] += pz;
+          a[4][l] += px * px;
+          a[5][l] += px * py;
+          a[6][l] += px * pz;
+          a[7][l] += py * py;
+          a[8][l] += py * pz;
+          a[9][l] += pz * pz;
+        }
+        s[10] += lanes;
+        lanes_used = true;
+        continue;
+      }
+      for (int l = 0; l < lanes; ++l) {
+        if (lab[l] != cur) fold();
+        step(s, cur, x0, lab[l], x + l, y);
+      }
     }
+    fold();
+#endif
+    for (; x < w; ++x) step(s, cur, x0, label_of(x, y), x, y);
     flush(cur, s, x0, w - 1, y);
   }
 };
