@@ -28,6 +28,20 @@
 #define EDGEPLANE_NOINLINE
 #endif
 
+// Host kernels whose inner loops are SIMD over pixels (the edge pass, smoothing, closings,
+// moments) are compiled three times on x86-64 ELF systems, for x86-64-v4 (AVX-512), x86-64-v3
+// (AVX2) and the baseline, and the loader picks the widest the CPU runs (GCC/Clang
+// target_clones).  The results are those of the baseline: the library compiles with
+// -ffp-contract=off (no fused multiply-add under any target), and every other float operation is
+// the same IEEE operation at any vector width.  Off under nvcc, where -march=native is given (the
+// code already targets the machine it runs on), or with EDGEPLANE_NO_TARGET_CLONES.
+#if !defined(__CUDACC__) && !defined(EDGEPLANE_NO_TARGET_CLONES) && defined(__x86_64__) && defined(__ELF__) && \
+    !defined(__AVX512F__) && ((defined(__clang__) && __clang_major__ >= 14) || (!defined(__clang__) && defined(__GNUC__) && __GNUC__ >= 11))
+#define EDGEPLANE_HOST_CLONES __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
+#else
+#define EDGEPLANE_HOST_CLONES
+#endif
+
 // Device code asserts only in debug builds (never in release kernels).
 #if !defined(NDEBUG) && !defined(__CUDA_ARCH__)
 #include <cassert>
@@ -99,7 +113,7 @@ struct window_runs {
   struct kernel {
     Px px;
     int chunks;
-    EDGEPLANE_HD void operator()(std::int64_t item) const {
+    EDGEPLANE_HOST_CLONES EDGEPLANE_HD void operator()(std::int64_t item) const {
       const int y = static_cast<int>(item / chunks), x0 = static_cast<int>(item % chunks) * Lanes;
       const int w = px.out.width, h = px.out.height, r = px.r;
       if (x0 < r || x0 + Lanes > w - r || y < r || y >= h - r) {

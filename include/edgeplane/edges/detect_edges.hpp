@@ -124,7 +124,7 @@ struct valid_runs_rows_kernel {
   image_view<const float> depth;
   std::uint8_t* runs;
   int r;
-  EDGEPLANE_HD void operator()(std::int64_t row) const {
+  EDGEPLANE_HOST_CLONES EDGEPLANE_HD void operator()(std::int64_t row) const {
     const int y = static_cast<int>(row), w = depth.width;
     const std::int64_t n = static_cast<std::int64_t>(w) * depth.height, o = static_cast<std::int64_t>(y) * w;
     std::uint8_t* left = runs + o;
@@ -186,7 +186,7 @@ struct valid_runs_bands_kernel {
       }
     }
   }
-  EDGEPLANE_HD void operator()(std::int64_t item) const {
+  EDGEPLANE_HOST_CLONES EDGEPLANE_HD void operator()(std::int64_t item) const {
     const int y0 = static_cast<int>(item) * band;
     const int y1 = y0 + band < depth.height ? y0 + band : depth.height;
     const std::int64_t n = static_cast<std::int64_t>(depth.width) * depth.height;
@@ -244,7 +244,7 @@ struct all_edges_kernel {
   }
   EDGEPLANE_HD void operator()(int x, int y) const { run(x, y, 0xffffu); }
   /// run(), called out of line (the row kernel's rare slow path).
-  EDGEPLANE_HD EDGEPLANE_NOINLINE void run_some(int x, int y, unsigned tests) const { run(x, y, tests); }
+  EDGEPLANE_HOST_CLONES EDGEPLANE_HD EDGEPLANE_NOINLINE void run_some(int x, int y, unsigned tests) const { run(x, y, tests); }
 };
 
 /// all_edges_kernel over runs of Lanes pixels of one row (work item = row * chunks + chunk), for
@@ -261,6 +261,7 @@ template <int Lanes>
 struct all_edges_rows_kernel {
   all_edges_kernel px;
   int chunks;  // runs per row: ceil(width / Lanes)
+  static constexpr int max_tile_reach = 32;  // the largest reach validate() allows (n_coe, n_cue <= 32)
 
   // farther_than(p, a, b, t, noise) is surely false (its shortcut), for lane-wise points.
   EDGEPLANE_HD EDGEPLANE_INLINE static bool surely_not_farther(point3 p, point3 a, point3 b, float t, float noise) {
@@ -358,20 +359,38 @@ struct all_edges_rows_kernel {
                                                        cnt + 7 * n, maybe);
   }
 
-  EDGEPLANE_HD void operator()(std::int64_t item) const {
+  EDGEPLANE_HOST_CLONES EDGEPLANE_HD void operator()(std::int64_t item) const {
     const int y = static_cast<int>(item / chunks), x0 = static_cast<int>(item % chunks) * Lanes;
     const int w = px.depth.width, h = px.depth.height, r = px.reach;
     // Every lane reads up to r steps of up to pitch + 1 elements either way: those reads must stay
-    // within the view's rows (and a run must not pass the row's end).
-    const std::int64_t pitch = px.depth.pitch, first = static_cast<std::int64_t>(y) * pitch + x0,
-                       reach_span = static_cast<std::int64_t>(r) * (pitch + 1);
-    if (x0 + Lanes > w || first < reach_span ||
-        first + Lanes - 1 + reach_span > static_cast<std::int64_t>(h - 1) * pitch + w - 1) {
+    // within the view's rows (else they read a copy, below), and a run must not pass the row's end.
+    const std::int64_t first = static_cast<std::int64_t>(y) * px.depth.pitch + x0,
+                       reach_span = static_cast<std::int64_t>(r) * (px.depth.pitch + 1);
+    if (x0 + Lanes > w || r > max_tile_reach) {
       const int x1 = x0 + Lanes < w ? x0 + Lanes : w;
       for (int x = x0; x < x1; ++x) px(x, y);
       return;
     }
+    std::ptrdiff_t pitch = px.depth.pitch;
     const float* c = &px.depth(x0, y);
+    float tile[(2 * max_tile_reach + 1) * (Lanes + 2 * max_tile_reach)];
+    if (first < reach_span || first + Lanes - 1 + reach_span > static_cast<std::int64_t>(h - 1) * pitch + w - 1) {
+      // Near the top or bottom (or a view's first or last columns): the lanes' reads would leave
+      // the view's rows, so they read a copy of the window instead, rows y - r .. y + r and columns
+      // x0 - r .. x0 + Lanes - 1 + r, with 0 (invalid) outside the image.  The pre-tests see the
+      // same values at the same coordinates, and the counts still mask everything outside.
+      const int tp = Lanes + 2 * r;
+      for (int dy = -r; dy <= r; ++dy) {
+        float* t = tile + static_cast<std::ptrdiff_t>(dy + r) * tp;
+        const int v = y + dy;
+        for (int j = 0; j < tp; ++j) {
+          const int u = x0 - r + j;
+          t[j] = v >= 0 && v < h && u >= 0 && u < w ? px.depth(u, v) : 0.f;
+        }
+      }
+      pitch = tp;
+      c = tile + static_cast<std::ptrdiff_t>(r) * tp + r;
+    }
     const std::int64_t n = static_cast<std::int64_t>(w) * h, i0 = static_cast<std::int64_t>(y) * w + x0;
     float zc[Lanes], noise_co[Lanes], noise_cu[Lanes];
     unsigned maybe[Lanes];

@@ -159,7 +159,7 @@ struct moments_kernel {
     if (l > 0) add(s, x, y);
   }
 
-  EDGEPLANE_HD void operator()(std::int64_t row) const {
+  EDGEPLANE_HOST_CLONES EDGEPLANE_HD void operator()(std::int64_t row) const {
     const int y = static_cast<int>(row), w = depth.width;
     std::uint64_t s[moment_slots] = {};
     std::int32_t cur = 0;
