@@ -321,20 +321,20 @@ TEST_CASE_TEMPLATE("erode_failed: the separable erosion marks exactly the pixels
                    EDGEPLANE_TEST_BACKENDS) {
   // Random rectangles of 6 candidate ids (ids 1, 3 and 5 failed) with sprinkled noise pixels, so
   // that windows are uniform, cut by other ids, and touch the border.
-  const int w = 57, h = 41;
+  const int w = 157, h = 41;  // more than two of the host's 64-column blocks
   std::vector<std::int32_t> cand(static_cast<std::size_t>(w) * h, 0);
   std::uint64_t state = 12345;
   auto next = [&](int m) {
     state = state * 6364136223846793005ull + 1442695040888963407ull;
     return static_cast<int>((state >> 33) % static_cast<std::uint64_t>(m));
   };
-  for (int k = 0; k < 25; ++k) {
+  for (int k = 0; k < 70; ++k) {
     const int x0 = next(w), y0 = next(h), x1 = std::min(w, x0 + 3 + next(25)), y1 = std::min(h, y0 + 3 + next(20));
     const int id = next(7);
     for (int y = y0; y < y1; ++y)
       for (int x = x0; x < x1; ++x) cand[static_cast<std::size_t>(y) * w + x] = id;
   }
-  for (int k = 0; k < 40; ++k) cand[static_cast<std::size_t>(next(h)) * w + next(w)] = next(7);
+  for (int k = 0; k < 110; ++k) cand[static_cast<std::size_t>(next(h)) * w + next(w)] = next(7);
   const std::vector<std::uint8_t> failed = {0, 1, 0, 1, 0, 1, 0};
   for (const B& b : variants<B>()) {
     CAPTURE(variant_name(b));

@@ -1,6 +1,7 @@
 // edgeplane: the edge detector, written once over direction and edge-type policies.
 #pragma once
 #include <cstdint>
+#include <cstring>
 
 #include "edgeplane/backend/buffer.hpp"
 #include "edgeplane/camera.hpp"
@@ -403,8 +404,19 @@ struct all_edges_rows_kernel {
     const std::uint8_t* cnt = px.runs + i0;  // plane q of the counts at cnt + q * n
     int full = 1;  // every lane valid, with all its counts at reach (most runs: surface)
     for (int l = 0; l < Lanes; ++l) full &= zc[l] > 0.f;
-    for (int q = 0; q < 8; ++q)
-      for (int l = 0; l < Lanes; ++l) full &= cnt[q * n + l] == r;
+    if (full) {  // the counts compared 8 bytes at a time: every byte of `word` equals r
+      const std::uint64_t rr = 0x0101010101010101ull * static_cast<std::uint64_t>(r);
+      std::uint64_t diff = 0;
+      for (int q = 0; q < 8; ++q)
+        for (int l = 0; l + 8 <= Lanes; l += 8) {
+          std::uint64_t word;
+          std::memcpy(&word, cnt + q * n + l, sizeof word);
+          diff |= word ^ rr;
+        }
+      for (int q = 0; q < 8; ++q)  // lanes past a multiple of 8 (none for 16 lanes)
+        for (int l = Lanes - Lanes % 8; l < Lanes; ++l) diff |= static_cast<std::uint64_t>(cnt[q * n + l] ^ r);
+      full = diff == 0;
+    }
     if (full)
       maybe_all<false>(c, x0, y, pitch, zc, noise_co, noise_cu, cnt, n, maybe);
     else
