@@ -106,23 +106,33 @@ void for_each_pixel_run(const Backend& b, int w, int h, const Pixel& px) {
 /// Host row kernels of windowed pixel kernels (smoothing, closings): px.lanes<Lanes>(x0, y) computes pixels
 /// x0 .. x0 + Lanes - 1 of row y at once where all their (2 px.r + 1)^2 windows lie inside the
 /// image (px.out's size), and must give exactly what px(x, y) gives; px(x, y) runs elsewhere.
-/// Use as for_each_pixel_run<window_runs<Px>::template kernel>.
+/// Use as for_each_pixel_run<window_runs<Px>::template kernel> (compiled as EDGEPLANE_HOST_CLONES)
+/// or window_runs<Px>::template plain_kernel (compiled once: for kernels that wider vectors make
+/// slower, as the byte closings of the edge map measured).
 template <class Px>
 struct window_runs {
+  template <int Lanes>
+  EDGEPLANE_HD EDGEPLANE_INLINE static void run(const Px& px, int chunks, std::int64_t item) {
+    const int y = static_cast<int>(item / chunks), x0 = static_cast<int>(item % chunks) * Lanes;
+    const int w = px.out.width, h = px.out.height, r = px.r;
+    if (x0 < r || x0 + Lanes > w - r || y < r || y >= h - r) {
+      const int x1 = x0 + Lanes < w ? x0 + Lanes : w;
+      for (int x = x0; x < x1; ++x) px(x, y);
+      return;
+    }
+    px.template lanes<Lanes>(x0, y);
+  }
   template <int Lanes>
   struct kernel {
     Px px;
     int chunks;
-    EDGEPLANE_HOST_CLONES EDGEPLANE_HD void operator()(std::int64_t item) const {
-      const int y = static_cast<int>(item / chunks), x0 = static_cast<int>(item % chunks) * Lanes;
-      const int w = px.out.width, h = px.out.height, r = px.r;
-      if (x0 < r || x0 + Lanes > w - r || y < r || y >= h - r) {
-        const int x1 = x0 + Lanes < w ? x0 + Lanes : w;
-        for (int x = x0; x < x1; ++x) px(x, y);
-        return;
-      }
-      px.template lanes<Lanes>(x0, y);
-    }
+    EDGEPLANE_HOST_CLONES EDGEPLANE_HD void operator()(std::int64_t item) const { run<Lanes>(px, chunks, item); }
+  };
+  template <int Lanes>
+  struct plain_kernel {
+    Px px;
+    int chunks;
+    EDGEPLANE_HD void operator()(std::int64_t item) const { run<Lanes>(px, chunks, item); }
   };
 };
 }  // namespace edgeplane::detail

@@ -568,9 +568,9 @@ void close_edges(const Backend& b, image_view<const std::uint8_t> edges, image_v
                  image_view<std::uint8_t> mask, int r) {
   detail::check_same_size(edges, mask, "edges", "mask");
   detail::check_same_size(edges, scratch, "edges", "scratch");
-  detail::for_each_pixel_run<detail::window_runs<detail::mask_dilate_kernel>::template kernel>(
+  detail::for_each_pixel_run<detail::window_runs<detail::mask_dilate_kernel>::template plain_kernel>(
       b, edges.width, edges.height, detail::mask_dilate_kernel{edges, scratch, r});
-  detail::for_each_pixel_run<detail::window_runs<detail::mask_erode_kernel>::template kernel>(
+  detail::for_each_pixel_run<detail::window_runs<detail::mask_erode_kernel>::template plain_kernel>(
       b, edges.width, edges.height, detail::mask_erode_kernel{scratch, mask, r});
 }
 
