@@ -526,11 +526,11 @@ class segmenter {
       }
     }
     if (p_.label_closing_radius > 0 && num_planes > 0) {
-      detail::for_each_pixel_run<detail::window_runs<detail::label_dilate_kernel>::template kernel>(
+      detail::for_each_pixel_run<detail::window_runs<detail::label_dilate_kernel>::template plain_kernel>(
           b_, pw_, ph_, detail::label_dilate_kernel{la, lb, p_.label_closing_radius});
       lab_c_.resize(n);
       auto lc = view(lab_c_.data(), pw_, ph_);
-      detail::for_each_pixel_run<detail::window_runs<detail::label_erode_kernel>::template kernel>(
+      detail::for_each_pixel_run<detail::window_runs<detail::label_erode_kernel>::template plain_kernel>(
           b_, pw_, ph_, detail::label_erode_kernel{la, lb, lc, p_.label_closing_radius});
       std::swap(la, lc);
     }
