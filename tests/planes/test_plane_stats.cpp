@@ -306,3 +306,66 @@ TEST_CASE_TEMPLATE("accumulate_moments: long runs (the host's 8-pixel lanes) giv
     }
   }
 }
+
+TEST_CASE("inlier_labels::lanes: 8 labels at once equal the per-pixel labels, and the moments those of the label image") {
+  // Long runs of candidates (one plane looked up per run), candidates of no plane (table 0),
+  // pixels off their plane and holes; every start column, so runs cross lane boundaries.
+  const int w = 141, h = 19;
+  const auto k = camera(w, h);
+  const vec3 n = normalized({0.1, 0.3, -1.0});
+  auto depth = plane_image(k, w, h, n, 2.4);
+  lcg_noise noise(11);
+  std::vector<std::int32_t> cand(depth.size(), 0);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const std::size_t i = static_cast<std::size_t>(y) * w + x;
+      cand[i] = ((x + 2 * y) / 23) % 5;  // ids 0..4
+      depth[i] += noise(0.006f);         // some pixels beyond the 1 cm tolerance
+      if ((x + y * 5) % 37 == 0) depth[i] = 0.f;
+    }
+  const std::vector<std::uint16_t> table = {0, 1, 0, 2, 1};  // candidate 2 belongs to no plane
+  const std::vector<float> planes = {0, 0, 0, 0, float(n.x), float(n.y), float(n.z), 2.4f,
+                                     float(n.x), float(n.y), float(n.z), 2.41f};
+  std::vector<float> tol = {0.f, 0.01f, 0.008f};
+  const auto proj = detail::make_projector(k);
+  // Plane 2's tolerance is exactly the distance of one of its pixels (the first valid pixel of
+  // candidate 3 in row 0, past the first lane run), so that pixel tells "<=" from "<".
+  {
+    int bx = -1;
+    for (int x = 8; x + 8 < w && bx < 0; ++x)
+      if (cand[static_cast<std::size_t>(x)] == 3 && depth[static_cast<std::size_t>(x)] > 0.f) bx = x;
+    REQUIRE(bx >= 0);
+    tol[2] = detail::plane_distance(planes.data(), 2, proj(bx, 0, depth[static_cast<std::size_t>(bx)]));
+  }
+  const detail::inlier_labels lab{make_view<const std::int32_t>(cand.data(), w, h), table.data(), planes.data(),
+                                  tol.data(), make_view<const float>(depth.data(), w, h), proj};
+  static_assert(detail::has_label_lanes<detail::inlier_labels>);
+  static_assert(!detail::has_label_lanes<detail::image_labels>);
+  int mismatches = 0, kept = 0, dropped = 0;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x + 8 <= w; ++x) {
+      std::int32_t out[8];
+      lab.lanes<8>(x, y, out);
+      for (int l = 0; l < 8; ++l) {
+        const std::int32_t want = lab(x + l, y);
+        mismatches += out[l] != want;
+        kept += want > 0;
+        dropped += want == 0 && cand[static_cast<std::size_t>(y) * w + x + l] != 0;
+      }
+    }
+  CHECK(mismatches == 0);
+  CHECK(kept > 1000);
+  CHECK(dropped > 1000);  // off-plane pixels, holes and candidate 2: not vacuous
+  // The moments through the lanes equal those of the image of per-pixel labels.
+  std::vector<std::uint16_t> labels(depth.size());
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) labels[static_cast<std::size_t>(y) * w + x] = static_cast<std::uint16_t>(lab(x, y));
+  const cpu b{};
+  std::vector<std::uint64_t> m1(3 * moment_slots), m2(3 * moment_slots);
+  std::vector<std::int32_t> b1(12), b2(12);
+  accumulate_moments(b, make_view<const float>(depth.data(), w, h), k, lab, 2, m1.data(), b1.data());
+  accumulate_moments(b, make_view<const float>(depth.data(), w, h), k,
+                     detail::image_labels{make_view<const std::uint16_t>(labels.data(), w, h)}, 2, m2.data(), b2.data());
+  CHECK(m1 == m2);
+  CHECK(b1 == b2);
+}

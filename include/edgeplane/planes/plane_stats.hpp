@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <cstring>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Dense>
@@ -74,7 +75,36 @@ struct inlier_labels {
     const point3 p = proj(x, y, z);
     return plane_distance(planes, g, p) <= tol[g] ? g : 0;
   }
+  /// out[l] = (*this)(x + l, y) for l < L (host lanes of moments_kernel): where all L pixels
+  /// belong to one candidate (most runs), its plane is looked up once.
+  template <int L>
+  EDGEPLANE_HD EDGEPLANE_INLINE void lanes(int x, int y, std::int32_t* out) const {
+    const std::int32_t* cr = &cand(x, y);
+    const std::int32_t c0 = cr[0];
+    bool one = true;
+    for (int l = 0; l < L; ++l) one &= cr[l] == c0;
+    const std::int32_t g = one && c0 > 0 ? table[c0] : 0;
+    if (!one || g == 0) {
+      for (int l = 0; l < L; ++l) out[l] = (*this)(x + l, y);
+      return;
+    }
+    const float* q = planes + 4 * g;
+    const float q0 = q[0], q1 = q[1], q2 = q[2], q3 = q[3], t = tol[g];
+    const float* zr = &depth(x, y);
+    for (int l = 0; l < L; ++l) {
+      const float z = zr[l];
+      const point3 p = proj(x + l, y, z);
+      const float d = fabsf(q0 * p.x + q1 * p.y + q2 * p.z + q3);  // plane_distance's operations
+      out[l] = ((z > 0.f) & (d <= t)) ? g : 0;
+    }
+  }
 };
+
+/// Whether a label source has lanes<L>(x, y, out) (the host's moments lanes use it).
+template <class Labels, class = void>
+inline constexpr bool has_label_lanes = false;
+template <class Labels>
+inline constexpr bool has_label_lanes<Labels, decltype(std::declval<const Labels&>().template lanes<8>(0, 0, nullptr))> = true;
 
 /// Labels from a label image (0 = none).
 struct image_labels {
@@ -179,11 +209,13 @@ struct moments_kernel {
     };
     for (; x + lanes <= w; x += lanes) {
       std::int32_t lab[lanes];
-      bool same = true;
-      for (int l = 0; l < lanes; ++l) {
-        lab[l] = label_of(x + l, y);
-        same &= lab[l] == cur;
+      if constexpr (has_label_lanes<Labels>) {
+        label_of.template lanes<lanes>(x, y, lab);
+      } else {
+        for (int l = 0; l < lanes; ++l) lab[l] = label_of(x + l, y);
       }
+      bool same = true;
+      for (int l = 0; l < lanes; ++l) same &= lab[l] == cur;
       if (same) {
         if (cur <= 0) continue;
         const float* zr = &depth(x, y);
