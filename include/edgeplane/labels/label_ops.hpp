@@ -81,8 +81,9 @@ struct grow_rows_kernel {
       return;
     }
     int any = 0, x = 0;
-    const int w = px.in.width, h = px.in.height;
+    const int w = px.in.width;
 #if !defined(__CUDA_ARCH__)
+    const int h = px.in.height;
     // Runs of 16 pixels (with both neighbouring rows and columns inside the image) where no pixel
     // can take a label, since each is labelled, invalid, or has no labelled 4-neighbour: grow_kernel
     // writes their input unchanged, so they are copied.
