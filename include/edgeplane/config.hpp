@@ -38,8 +38,12 @@
 #if !defined(__CUDACC__) && !defined(EDGEPLANE_NO_TARGET_CLONES) && defined(__x86_64__) && defined(__ELF__) && \
     !defined(__AVX512F__) && ((defined(__clang__) && __clang_major__ >= 14) || (!defined(__clang__) && defined(__GNUC__) && __GNUC__ >= 11))
 #define EDGEPLANE_HOST_CLONES __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
+// A slow path kept out of line and cloned: a cloned function is called through its resolver,
+// never inlined, and Clang refuses noinline next to target_clones.
+#define EDGEPLANE_HOST_CLONES_NOINLINE EDGEPLANE_HOST_CLONES
 #else
 #define EDGEPLANE_HOST_CLONES
+#define EDGEPLANE_HOST_CLONES_NOINLINE EDGEPLANE_NOINLINE
 #endif
 
 // Device code asserts only in debug builds (never in release kernels).

@@ -245,7 +245,7 @@ struct all_edges_kernel {
   }
   EDGEPLANE_HD void operator()(int x, int y) const { run(x, y, 0xffffu); }
   /// run(), called out of line (the row kernel's rare slow path).
-  EDGEPLANE_HOST_CLONES EDGEPLANE_HD EDGEPLANE_NOINLINE void run_some(int x, int y, unsigned tests) const { run(x, y, tests); }
+  EDGEPLANE_HOST_CLONES_NOINLINE EDGEPLANE_HD void run_some(int x, int y, unsigned tests) const { run(x, y, tests); }
 };
 
 /// all_edges_kernel over runs of Lanes pixels of one row (work item = row * chunks + chunk), for
