@@ -28,13 +28,14 @@
 #define EDGEPLANE_NOINLINE
 #endif
 
-// Host kernels whose inner loops are SIMD over pixels (the edge pass, smoothing, closings,
-// moments) are compiled three times on x86-64 ELF systems, for x86-64-v4 (AVX-512), x86-64-v3
-// (AVX2) and the baseline, and the loader picks the widest the CPU runs (GCC/Clang
-// target_clones).  The results are those of the baseline: the library compiles with
-// -ffp-contract=off (no fused multiply-add under any target), and every other float operation is
-// the same IEEE operation at any vector width.  Off under nvcc, where -march=native is given (the
-// code already targets the machine it runs on), or with EDGEPLANE_NO_TARGET_CLONES.
+// Host kernels whose inner loops are SIMD over pixels (the edge pass, smoothing, the depth
+// closing, moments, growth, the failed-candidate erosion) are compiled three times on x86-64 ELF
+// systems, for x86-64-v4 (AVX-512), x86-64-v3 (AVX2) and the baseline, and the loader picks the
+// widest the CPU runs (GCC/Clang target_clones).  The results are those of the baseline: the
+// library compiles with -ffp-contract=off (no fused multiply-add under any target), and every
+// other float operation is the same IEEE operation at any vector width.  Off under nvcc, when the
+// compiler already targets AVX-512 (-march=native on such a machine), or with
+// EDGEPLANE_NO_TARGET_CLONES.
 #if !defined(__CUDACC__) && !defined(EDGEPLANE_NO_TARGET_CLONES) && defined(__x86_64__) && defined(__ELF__) && \
     !defined(__AVX512F__) && ((defined(__clang__) && __clang_major__ >= 14) || (!defined(__clang__) && defined(__GNUC__) && __GNUC__ >= 11))
 #define EDGEPLANE_HOST_CLONES __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))

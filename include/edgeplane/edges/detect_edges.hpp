@@ -406,15 +406,14 @@ struct all_edges_rows_kernel {
     for (int l = 0; l < Lanes; ++l) full &= zc[l] > 0.f;
     if (full) {  // the counts compared 8 bytes at a time: every byte of `word` equals r
       const std::uint64_t rr = 0x0101010101010101ull * static_cast<std::uint64_t>(r);
+      static_assert(Lanes % 8 == 0, "runs of whole 8-byte words");
       std::uint64_t diff = 0;
       for (int q = 0; q < 8; ++q)
-        for (int l = 0; l + 8 <= Lanes; l += 8) {
+        for (int l = 0; l < Lanes; l += 8) {
           std::uint64_t word;
           std::memcpy(&word, cnt + q * n + l, sizeof word);
           diff |= word ^ rr;
         }
-      for (int q = 0; q < 8; ++q)  // lanes past a multiple of 8 (none for 16 lanes)
-        for (int l = Lanes - Lanes % 8; l < Lanes; ++l) diff |= static_cast<std::uint64_t>(cnt[q * n + l] ^ r);
       full = diff == 0;
     }
     if (full)

@@ -158,40 +158,20 @@ struct eroded_rows_kernel {
     }
   }
 };
-/// Columns (one work item per column; device backends): bit 1 on the pixels of failed candidates whose 2r + 1
-/// rows of windows are all uniform with the same value, i.e. whose (2r+1)^2 window is one candidate.
-struct eroded_columns_kernel {
-  image_view<const std::int32_t> cand;
-  const std::uint8_t* failed;
-  image_view<std::uint8_t> mask;
-  int r;
-  EDGEPLANE_HD void operator()(std::int64_t col) const {
-    const int x = static_cast<int>(col);
-    int run = 0;  // uniform row windows of one value ending at y
-    for (int y = 0; y < cand.height; ++y) {
-      if (mask(x, y) & 1)
-        run = (run > 0 && cand(x, y) == cand(x, y - 1)) ? run + 1 : 1;
-      else
-        run = 0;
-      if (run >= 2 * r + 1) {
-        const std::int32_t c = cand(x, y - r);
-        if (c > 0 && failed[c]) mask(x, y - r) = static_cast<std::uint8_t>(mask(x, y - r) | 2);
-      }
-    }
-  }
-};
-/// The columns pass for host backends, one work item per block of `block` (<= 256) columns walked
-/// down together row by row (rows are contiguous in memory; a column walk touches a cache line per
-/// pixel): the same marks as eroded_columns_kernel.
+/// Columns, one work item per block of `block` (<= MaxBlock) columns walked down together row by
+/// row: bit 1 on the pixels of failed candidates whose 2r + 1 rows of windows are all uniform with
+/// the same value, i.e. whose (2r+1)^2 window is one candidate.  Host backends take blocks of 64
+/// (rows are contiguous in memory; a single column's walk touches a cache line per pixel), device
+/// backends a column per thread (MaxBlock = block = 1).
+template <int MaxBlock>
 struct eroded_column_blocks_kernel {
   image_view<const std::int32_t> cand;
   const std::uint8_t* failed;
   image_view<std::uint8_t> mask;
   int r, block;
-  static constexpr int max_block = 256;
   EDGEPLANE_HOST_CLONES EDGEPLANE_HD void operator()(std::int64_t item) const {
     const int x0 = static_cast<int>(item) * block, x1 = x0 + block < cand.width ? x0 + block : cand.width;
-    int run[max_block];  // per column: uniform row windows of one value ending at row y
+    int run[MaxBlock];  // per column: uniform row windows of one value ending at row y
     for (int x = x0; x < x1; ++x) run[x - x0] = 0;
     for (int y = 0; y < cand.height; ++y) {
       const std::int32_t* cr = &cand(0, y);
@@ -292,12 +272,9 @@ void erode_failed(const Backend& b, image_view<const std::int32_t> cand, const s
                   image_view<std::uint8_t> mask) {
   detail::check_same_size(cand, mask, "candidates", "mask");
   b.for_each_index(cand.height, detail::eroded_rows_kernel{cand, mask, r});
-  if constexpr (Backend::host_accessible) {
-    constexpr int block = 64;
-    b.for_each_index((cand.width + block - 1) / block, detail::eroded_column_blocks_kernel{cand, failed, mask, r, block});
-  } else {
-    b.for_each_index(cand.width, detail::eroded_columns_kernel{cand, failed, mask, r});
-  }
+  constexpr int block = Backend::host_accessible ? 64 : 1;
+  b.for_each_index((cand.width + block - 1) / block,
+                   detail::eroded_column_blocks_kernel<block>{cand, failed, mask, r, block});
 }
 
 /// Connected components with the lock-free union-find: `parent` (n elements, backend memory) ends
