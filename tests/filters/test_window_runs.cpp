@@ -56,9 +56,12 @@ TEST_CASE("window_runs: the closings' row kernels equal their per-pixel kernels"
     CAPTURE(zeros);
     const auto depth = random_image<float>(g, zeros, 0.5f, 4.f);
     const auto dilated = random_image<float>(g, zeros / 3, 0.5f, 4.f);
-    const auto labels = random_image<std::uint16_t>(g, zeros, 1, 7);
-    const auto ldil = random_image<std::uint16_t>(g, zeros / 3, 1, 7);
-    auto mask = random_image<std::uint8_t>(g, zeros, 1, 30);
+    // labels and mask bytes over their whole range too: the host kernels test 8 bytes or 4 labels
+    // of a word at once, where a high bit set must still count as nonzero
+    const bool wide = zeros > 0.3;
+    const auto labels = random_image<std::uint16_t>(g, zeros, 1, wide ? 65535 : 7);
+    const auto ldil = random_image<std::uint16_t>(g, zeros / 3, 1, wide ? 65535 : 7);
+    auto mask = random_image<std::uint8_t>(g, zeros, 1, wide ? 255 : 30);
     const auto zv = make_view<const float>(depth.data(), w, h), dv = make_view<const float>(dilated.data(), w, h);
     const auto lv = make_view<const std::uint16_t>(labels.data(), w, h);
     const auto ldv = make_view<const std::uint16_t>(ldil.data(), w, h);
@@ -76,4 +79,50 @@ TEST_CASE("window_runs: the closings' row kernels equal their per-pixel kernels"
       CHECK(differ<std::uint8_t>([&](image_view<std::uint8_t> o) { return detail::mask_erode_kernel{mv, o, r}; }) == 0);
     }
   }
+}
+
+TEST_CASE("swar: nonzero bytes and 16-bit lanes of a word, every value in every lane") {
+  lcg_noise g(11);
+  int wrong = 0;
+  for (int lane = 0; lane < 8; ++lane)
+    for (int v = 0; v < 256; ++v) {
+      std::uint8_t b[8];
+      for (auto& e : b) e = static_cast<std::uint8_t>(256 * g.uniform01());
+      b[lane] = static_cast<std::uint8_t>(v);
+      const std::uint64_t got = detail::swar::nonzero_bytes(detail::swar::load(b));
+      std::uint8_t out[8];
+      detail::swar::store(out, got);
+      for (int k = 0; k < 8; ++k) wrong += out[k] != (b[k] != 0 ? 1 : 0);
+    }
+  for (int lane = 0; lane < 4; ++lane)
+    for (int v = 0; v < 65536; ++v) {
+      std::uint16_t b[4];
+      for (auto& e : b) e = g.uniform01() < 0.3 ? 0 : static_cast<std::uint16_t>(65536 * g.uniform01());
+      b[lane] = static_cast<std::uint16_t>(v);
+      std::uint16_t out[4];
+      detail::swar::store(out, detail::swar::nonzero_lanes16(detail::swar::load(b)));
+      for (int k = 0; k < 4; ++k) wrong += out[k] != (b[k] != 0 ? 0xffff : 0);
+    }
+  CHECK(wrong == 0);
+}
+
+TEST_CASE("window_runs: a single labelled pixel anywhere reaches the label closing's windows") {
+  // The label dilation first asks whether a run's windows hold any label at all (whole words of
+  // each window row, the last one overlapping); a label missed there would leave a gap unfilled.
+  constexpr int sw = 40, sh = 9;
+  int wrong = 0;
+  for (const int r : {1, 2, 3})
+    for (int py = 0; py < sh; ++py)
+      for (int px = 0; px < sw; ++px) {
+        std::vector<std::uint16_t> in(static_cast<std::size_t>(sw) * sh, 0), a(in.size(), 1), b(in.size(), 2);
+        in[static_cast<std::size_t>(py) * sw + px] = 5;
+        const auto iv = make_view<const std::uint16_t>(in.data(), sw, sh);
+        const detail::label_dilate_kernel pa{iv, make_view(a.data(), sw, sh), r};
+        for (int y = 0; y < sh; ++y)
+          for (int x = 0; x < sw; ++x) pa(x, y);
+        const detail::label_dilate_kernel pb{iv, make_view(b.data(), sw, sh), r};
+        detail::for_each_pixel_run<detail::window_runs<detail::label_dilate_kernel>::plain_kernel>(cpu{}, sw, sh, pb);
+        wrong += a != b;
+      }
+  CHECK(wrong == 0);
 }

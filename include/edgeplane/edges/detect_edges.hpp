@@ -6,6 +6,7 @@
 #include "edgeplane/backend/buffer.hpp"
 #include "edgeplane/camera.hpp"
 #include "edgeplane/config.hpp"
+#include "edgeplane/detail/swar.hpp"
 #include "edgeplane/edges/directions.hpp"
 #include "edgeplane/edges/edge_types.hpp"
 #include "edgeplane/edges/neighbourhood.hpp"
@@ -455,16 +456,18 @@ struct mask_dilate_kernel {
         }
     out(x, y) = v;
   }
-  template <int Lanes>  // see window_runs
+  template <int Lanes>  // see window_runs; 8 bytes per word (swar)
   EDGEPLANE_HD EDGEPLANE_INLINE void lanes(int x0, int y) const {
-    std::uint8_t v[Lanes] = {};
+    static_assert(Lanes % 8 == 0, "runs of whole 8-byte words");
+    constexpr int words = Lanes / 8;
+    std::uint64_t v[words] = {};
     for (int dy = -r; dy <= r; ++dy) {
       const std::uint8_t* row = &in(x0 - r, y + dy);
       for (int j = 0; j <= 2 * r; ++j)
-        for (int l = 0; l < Lanes; ++l) v[l] = static_cast<std::uint8_t>(v[l] | row[j + l]);
+        for (int k = 0; k < words; ++k) v[k] |= swar::load(row + j + 8 * k);
     }
     std::uint8_t* o = &out(x0, y);
-    for (int l = 0; l < Lanes; ++l) o[l] = v[l] ? 1 : 0;
+    for (int k = 0; k < words; ++k) swar::store(o + 8 * k, swar::nonzero_bytes(v[k]));
   }
 };
 
@@ -488,26 +491,26 @@ struct mask_erode_kernel {
         }
     out(x, y) = v;
   }
-  template <int Lanes>  // see window_runs; the centre is in the window
+  template <int Lanes>  // see window_runs; the centre is in the window; 8 bytes per word (swar)
   EDGEPLANE_HD EDGEPLANE_INLINE void lanes(int x0, int y) const {
-    std::uint8_t v[Lanes];
+    static_assert(Lanes % 8 == 0, "runs of whole 8-byte words");
+    constexpr int words = Lanes / 8;
+    std::uint64_t v[words];  // 1 per byte while the window is all set so far
     const std::uint8_t* c = &in(x0, y);
-    int any = 0;
-    for (int l = 0; l < Lanes; ++l) {
-      v[l] = c[l] != 0;
-      any |= v[l];
-    }
-    if (!any) {  // no pixel set: nothing to erode
-      for (int l = 0; l < Lanes; ++l) out(x0 + l, y) = 0;
-      return;
-    }
-    for (int dy = -r; dy <= r; ++dy) {
-      const std::uint8_t* row = &in(x0 - r, y + dy);
-      for (int j = 0; j <= 2 * r; ++j)
-        for (int l = 0; l < Lanes; ++l) v[l] = static_cast<std::uint8_t>(v[l] & (row[j + l] != 0));
+    std::uint64_t any = 0;
+    for (int k = 0; k < words; ++k) {
+      v[k] = swar::nonzero_bytes(swar::load(c + 8 * k));
+      any |= v[k];
     }
     std::uint8_t* o = &out(x0, y);
-    for (int l = 0; l < Lanes; ++l) o[l] = v[l];
+    if (any) {  // else no pixel is set: nothing to erode, all 0
+      for (int dy = -r; dy <= r; ++dy) {
+        const std::uint8_t* row = &in(x0 - r, y + dy);
+        for (int j = 0; j <= 2 * r; ++j)
+          for (int k = 0; k < words; ++k) v[k] &= swar::nonzero_bytes(swar::load(row + j + 8 * k));
+      }
+    }
+    for (int k = 0; k < words; ++k) swar::store(o + 8 * k, v[k]);
   }
 };
 

@@ -2,9 +2,11 @@
 // unlabelled pixels, the final closing, and nearest-neighbour upsampling.
 #pragma once
 #include <cstdint>
+#include <cstring>
 
 #include "edgeplane/backend/atomic.hpp"
 #include "edgeplane/config.hpp"
+#include "edgeplane/detail/swar.hpp"
 #include "edgeplane/detail/geometry.hpp"
 #include "edgeplane/image.hpp"
 #include "edgeplane/labels/union_find.hpp"
@@ -182,28 +184,41 @@ struct label_dilate_kernel {
     }
     out(x, y) = v;
   }
-  template <int Lanes>  // see window_runs: the smallest nonzero label, 0 taken as 65536
+  template <int Lanes>  // see window_runs
   EDGEPLANE_HD EDGEPLANE_INLINE void lanes(int x0, int y) const {
+    static_assert(Lanes % 4 == 0, "runs of whole 64-bit words");
     const std::uint16_t* c = &in(x0, y);
     std::uint16_t* o = &out(x0, y);
-    int gaps = 0;
-    for (int l = 0; l < Lanes; ++l) gaps |= c[l] == 0;
+    std::uint64_t gaps = 0;  // 4 labels per word (swar)
+    for (int l = 0; l < Lanes; l += 4) gaps |= ~swar::nonzero_lanes16(swar::load(c + l));
     if (!gaps) {  // labelled pixels keep their label
-      for (int l = 0; l < Lanes; ++l) o[l] = c[l];
+      std::memcpy(o, c, sizeof(std::uint16_t) * Lanes);
       return;
     }
-    std::int32_t m[Lanes];
-    for (int l = 0; l < Lanes; ++l) m[l] = 0x10000;
+    std::uint64_t any = 0;  // a label anywhere in the windows (else the gaps stay 0)
+    const int span = 2 * r + Lanes;  // the windows' columns, x0 - r .. x0 + Lanes - 1 + r
+    for (int dy = -r; dy <= r; ++dy) {
+      const std::uint16_t* row = &in(x0 - r, y + dy);
+      for (int j = 0; j + 4 <= span; j += 4) any |= swar::load(row + j);
+      any |= swar::load(row + span - 4);
+    }
+    if (!any) {
+      std::memcpy(o, c, sizeof(std::uint16_t) * Lanes);
+      return;
+    }
+    // label - 1 wraps 0 to 0xffff, so the unsigned minimum of (label - 1) + 1 is the smallest
+    // nonzero label, or 0 where the window has none
+    std::uint16_t m[Lanes];
+    for (int l = 0; l < Lanes; ++l) m[l] = 0xffff;
     for (int dy = -r; dy <= r; ++dy) {
       const std::uint16_t* row = &in(x0 - r, y + dy);
       for (int j = 0; j <= 2 * r; ++j)
         for (int l = 0; l < Lanes; ++l) {
-          const std::int32_t v = row[j + l] != 0 ? std::int32_t(row[j + l]) : 0x10000;
+          const std::uint16_t v = static_cast<std::uint16_t>(row[j + l] - 1);
           m[l] = v < m[l] ? v : m[l];
         }
     }
-    for (int l = 0; l < Lanes; ++l)
-      o[l] = c[l] != 0 ? c[l] : static_cast<std::uint16_t>(m[l] == 0x10000 ? 0 : m[l]);
+    for (int l = 0; l < Lanes; ++l) o[l] = c[l] != 0 ? c[l] : static_cast<std::uint16_t>(m[l] + 1);
   }
 };
 
@@ -231,22 +246,26 @@ struct label_erode_kernel {
   }
   template <int Lanes>  // see window_runs
   EDGEPLANE_HD EDGEPLANE_INLINE void lanes(int x0, int y) const {
+    static_assert(Lanes % 4 == 0, "runs of whole 64-bit words");
+    constexpr int words = Lanes / 4;  // 4 labels per word (swar)
     const std::uint16_t* o0 = &original(x0, y);
-    std::uint16_t* o = &out(x0, y);
-    int filled = 0;
-    for (int l = 0; l < Lanes; ++l) filled |= o0[l] == 0;
-    if (!filled) {  // original labels are kept
-      for (int l = 0; l < Lanes; ++l) o[l] = o0[l];
-      return;
-    }
-    std::uint8_t gap[Lanes] = {};  // the window holds an unlabelled dilated pixel
-    for (int dy = -r; dy <= r; ++dy) {
-      const std::uint16_t* row = &dilated(x0 - r, y + dy);
-      for (int j = 0; j <= 2 * r; ++j)
-        for (int l = 0; l < Lanes; ++l) gap[l] = static_cast<std::uint8_t>(gap[l] | (row[j + l] == 0));
-    }
     const std::uint16_t* d = &dilated(x0, y);
-    for (int l = 0; l < Lanes; ++l) o[l] = o0[l] != 0 ? o0[l] : (gap[l] ? std::uint16_t(0) : d[l]);
+    std::uint16_t* o = &out(x0, y);
+    // orig: the original labels, kept; fill: the dilated label where the original has none, kept
+    // where the lane's whole window is labelled in the dilated image
+    std::uint64_t orig[words], fill[words], any = 0;
+    for (int k = 0; k < words; ++k) {
+      orig[k] = swar::load(o0 + 4 * k);
+      fill[k] = swar::load(d + 4 * k) & ~swar::nonzero_lanes16(orig[k]);
+      any |= fill[k];
+    }
+    if (any)
+      for (int dy = -r; dy <= r; ++dy) {
+        const std::uint16_t* row = &dilated(x0 - r, y + dy);
+        for (int j = 0; j <= 2 * r; ++j)
+          for (int k = 0; k < words; ++k) fill[k] &= swar::nonzero_lanes16(swar::load(row + j + 4 * k));
+      }
+    for (int k = 0; k < words; ++k) swar::store(o + 4 * k, orig[k] | fill[k]);
   }
 };
 
