@@ -381,3 +381,48 @@ TEST_CASE("count_roots_blocks_kernel counts as count_roots_kernel does") {
     }
   CHECK(std::count_if(a.begin(), a.end(), [](std::int32_t k) { return k > 0; }) > 50);
 }
+
+TEST_CASE_TEMPLATE("grid4_adjacency: components equal a serial union-find on random images", B, EDGEPLANE_TEST_BACKENDS) {
+  // Random depth in levels 4 cm apart (one step joins within the 6 cm bound, two do not, so
+  // joining is not transitive), random holes, odd sizes, single rows and columns; the serial
+  // reference unites every pair the adjacency names.
+  lcg_noise rng(17);
+  for (const auto [w, h] : {std::pair{1, 1}, std::pair{1, 9}, std::pair{13, 1}, std::pair{37, 23}, std::pair{64, 40}}) {
+    for (const double holes : {0.0, 0.2, 0.6}) {
+      CAPTURE(w);
+      CAPTURE(h);
+      CAPTURE(holes);
+      const std::size_t n = static_cast<std::size_t>(w) * h;
+      std::vector<float> depth(n);
+      std::vector<std::uint8_t> cov(n);
+      for (std::size_t i = 0; i < n; ++i) {
+        depth[i] = 1.f + 0.04f * static_cast<float>(rng.next_u32(4));
+        cov[i] = rng.uniform01() < holes ? 0 : 1;
+      }
+      const detail::covered_active host_active{cov.data(), nullptr};
+      const detail::grid4_adjacency<detail::covered_active> host_adj{make_view<const float>(depth.data(), w, h),
+                                                                     host_active, 0.06f, 0.f, 0.f};
+      reference_uf ref(static_cast<int>(n));
+      for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+          std::int32_t a[4], c[4];
+          const int k = host_adj(x, y, a, c);
+          for (int j = 0; j < k; ++j) ref.unite(a[j], c[j]);
+        }
+      std::vector<std::int32_t> want = ref.component_min();
+      for (std::size_t i = 0; i < n; ++i)
+        if (!cov[i]) want[i] = -1;
+      for (const B& b : variants<B>()) {
+        CAPTURE(variant_name(b));
+        device_array<float, B> z(b, depth);
+        device_array<std::uint8_t, B> c(b, cov);
+        device_array<std::int32_t, B> parent(b, n, -7);
+        const detail::covered_active active{c.data(), nullptr};
+        connected_components(b, static_cast<std::int64_t>(n), active, static_cast<std::int64_t>(n),
+                             detail::grid4_adjacency<detail::covered_active>{z.cview(w, h), active, 0.06f, 0.f, 0.f},
+                             parent.data());
+        CHECK(parent.host() == want);  // flattened: every element holds its root
+      }
+    }
+  }
+}
