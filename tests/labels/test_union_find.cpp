@@ -387,7 +387,7 @@ TEST_CASE_TEMPLATE("grid4_adjacency: components equal a serial union-find on ran
   // joining is not transitive), random holes, odd sizes, single rows and columns; the serial
   // reference unites every pair the adjacency names.
   lcg_noise rng(17);
-  for (const auto [w, h] : {std::pair{1, 1}, std::pair{1, 9}, std::pair{13, 1}, std::pair{37, 23}, std::pair{64, 40}}) {
+  for (const auto& [w, h] : {std::pair{1, 1}, std::pair{1, 9}, std::pair{13, 1}, std::pair{37, 23}, std::pair{64, 40}}) {
     for (const double holes : {0.0, 0.2, 0.6}) {
       CAPTURE(w);
       CAPTURE(h);
