@@ -1,7 +1,6 @@
 // edgeplane: the edge detector, written once over direction and edge-type policies.
 #pragma once
 #include <cstdint>
-#include <cstring>
 
 #include "edgeplane/backend/buffer.hpp"
 #include "edgeplane/camera.hpp"
@@ -405,16 +404,12 @@ struct all_edges_rows_kernel {
     const std::uint8_t* cnt = px.runs + i0;  // plane q of the counts at cnt + q * n
     int full = 1;  // every lane valid, with all its counts at reach (most runs: surface)
     for (int l = 0; l < Lanes; ++l) full &= zc[l] > 0.f;
-    if (full) {  // the counts compared 8 bytes at a time: every byte of `word` equals r
-      const std::uint64_t rr = 0x0101010101010101ull * static_cast<std::uint64_t>(r);
+    if (full) {  // the counts compared 8 bytes at a time: every byte of each word equals r
+      const std::uint64_t rr = swar::ones8 * static_cast<std::uint64_t>(r);
       static_assert(Lanes % 8 == 0, "runs of whole 8-byte words");
       std::uint64_t diff = 0;
       for (int q = 0; q < 8; ++q)
-        for (int l = 0; l < Lanes; l += 8) {
-          std::uint64_t word;
-          std::memcpy(&word, cnt + q * n + l, sizeof word);
-          diff |= word ^ rr;
-        }
+        for (int l = 0; l < Lanes; l += 8) diff |= swar::load(cnt + q * n + l) ^ rr;
       full = diff == 0;
     }
     if (full)

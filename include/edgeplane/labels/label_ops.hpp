@@ -6,8 +6,8 @@
 
 #include "edgeplane/backend/atomic.hpp"
 #include "edgeplane/config.hpp"
-#include "edgeplane/detail/swar.hpp"
 #include "edgeplane/detail/geometry.hpp"
+#include "edgeplane/detail/swar.hpp"
 #include "edgeplane/image.hpp"
 #include "edgeplane/labels/union_find.hpp"
 
@@ -191,18 +191,16 @@ struct label_dilate_kernel {
     std::uint16_t* o = &out(x0, y);
     std::uint64_t gaps = 0;  // 4 labels per word (swar)
     for (int l = 0; l < Lanes; l += 4) gaps |= ~swar::nonzero_lanes16(swar::load(c + l));
-    if (!gaps) {  // labelled pixels keep their label
-      std::memcpy(o, c, sizeof(std::uint16_t) * Lanes);
-      return;
-    }
     std::uint64_t any = 0;  // a label anywhere in the windows (else the gaps stay 0)
-    const int span = 2 * r + Lanes;  // the windows' columns, x0 - r .. x0 + Lanes - 1 + r
-    for (int dy = -r; dy <= r; ++dy) {
-      const std::uint16_t* row = &in(x0 - r, y + dy);
-      for (int j = 0; j + 4 <= span; j += 4) any |= swar::load(row + j);
-      any |= swar::load(row + span - 4);
+    if (gaps) {
+      const int span = 2 * r + Lanes;  // the windows' columns, x0 - r .. x0 + Lanes - 1 + r
+      for (int dy = -r; dy <= r; ++dy) {
+        const std::uint16_t* row = &in(x0 - r, y + dy);
+        for (int j = 0; j + 4 <= span; j += 4) any |= swar::load(row + j);
+        any |= swar::load(row + span - 4);
+      }
     }
-    if (!any) {
+    if (!any) {  // no gap, or nothing to fill one with: every pixel keeps its label (or its 0)
       std::memcpy(o, c, sizeof(std::uint16_t) * Lanes);
       return;
     }
