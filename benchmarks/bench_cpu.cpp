@@ -7,7 +7,9 @@
 //  - the whole pipeline per preset (segmenter reused, uint16 frame in, labels and planes out),
 //    with pixels per second and time per pixel (the cost growth across sizes);
 //  - throughput over a 24-frame sequence of a moving camera through one segmenter: frames per
-//    second, the segmenter's scratch bytes and the process's peak resident memory.
+//    second, the segmenter's scratch bytes and the process's peak resident memory; and the same
+//    sequence through a two-lane edgeplane::pipeline (serial lanes: a frame per core; parallel
+//    lanes), whose frames per second against it is the gain of frame-level parallelism.
 // Every benchmark reports real (wall) time: the CPU backend is synchronous.
 #include <benchmark/benchmark.h>
 #include <sys/resource.h>
@@ -217,6 +219,33 @@ void sequence(benchmark::State& st, const char* preset_name) {
   st.counters["peak_rss_MiB"] = static_cast<double>(ru.ru_maxrss) / 1024.0;
 }
 
+// The same sequence through an edgeplane::pipeline: `lanes` segmenters side by side, each on its
+// own thread (serial: a whole frame per core; parallel: every lane's kernels on TBB too), frames
+// submitted while there is room and retrieved in order.  Frames per second against `sequence`
+// above is the gain of frame-level parallelism.
+void sequence_pipelined(benchmark::State& st, const char* preset_name, bool serial_lanes) {
+  const int w = static_cast<int>(st.range(0)), h = static_cast<int>(st.range(1));
+  const int lanes = static_cast<int>(st.range(2));
+  intrinsics k;
+  const auto& seq = sequence_at(w, h, k);
+  edgeplane::pipeline<cpu> pl(preset(preset_name), lanes, cpu{serial_lanes ? cpu::mode::serial : cpu::mode::parallel});
+  std::vector<std::uint16_t> labels(static_cast<std::size_t>(w) * h);
+  segmentation_result res;
+  for (auto _ : st) {
+    for (const auto& frame_mm : seq) {
+      if (pl.full()) pl.retrieve(make_view(labels.data(), w, h), res);
+      pl.submit(make_view(frame_mm.data(), w, h), 0.001f, k);
+    }
+    while (pl.in_flight() > 0) pl.retrieve(make_view(labels.data(), w, h), res);
+    benchmark::DoNotOptimize(labels.data());
+  }
+  rusage ru{};
+  getrusage(RUSAGE_SELF, &ru);
+  st.counters["frames_per_second"] =
+      benchmark::Counter(static_cast<double>(seq.size()), benchmark::Counter::kIsIterationInvariantRate);
+  st.counters["peak_rss_MiB"] = static_cast<double>(ru.ru_maxrss) / 1024.0;
+}
+
 #define EDGEPLANE_SIZES Args({256, 212})->Args({512, 424})->Args({640, 480})->Unit(benchmark::kMillisecond)->UseRealTime()
 BENCHMARK(convert)->EDGEPLANE_SIZES;
 BENCHMARK(depth_closing)->EDGEPLANE_SIZES;
@@ -236,6 +265,9 @@ BENCHMARK_CAPTURE(pipeline, thesis_full, "thesis_full")->EDGEPLANE_SIZES;
 BENCHMARK_CAPTURE(pipeline, thesis_half, "thesis_half")->EDGEPLANE_SIZES;
 BENCHMARK_CAPTURE(pipeline, kinect2, "kinect2")->EDGEPLANE_SIZES;
 BENCHMARK_CAPTURE(sequence, thesis_full, "thesis_full")->EDGEPLANE_SIZES;
+#define EDGEPLANE_LANES(n) Args({256, 212, n})->Args({512, 424, n})->Args({640, 480, n})->Unit(benchmark::kMillisecond)->UseRealTime()
+BENCHMARK_CAPTURE(sequence_pipelined, thesis_full_serial_lanes, "thesis_full", true)->EDGEPLANE_LANES(2);
+BENCHMARK_CAPTURE(sequence_pipelined, thesis_full_parallel_lanes, "thesis_full", false)->EDGEPLANE_LANES(2);
 }  // namespace
 
 BENCHMARK_MAIN();

@@ -9,6 +9,7 @@
 #include "edgeplane/labels/label_ops.hpp"
 #include "edgeplane/labels/union_find.hpp"
 #include "edgeplane/params.hpp"
+#include "edgeplane/pipeline.hpp"
 #include "edgeplane/planes/plane_stats.hpp"
 #include "edgeplane/planes/validate.hpp"
 #include "edgeplane/segmenter.hpp"

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <chrono>
+#include <cmath>
 #include <cstdint>
 #include <string>
 #include <type_traits>
@@ -83,6 +84,19 @@ struct count_roots_blocks_kernel {
     if (cur >= 0) atomic_add(count + cur, run);
   }
 };
+/// Throws edgeplane::error unless a frame's depth view, depth scale and intrinsics can be segmented.
+template <class In>
+void check_frame(image_view<const In> depth, float scale, const intrinsics& k) {
+  check_view(depth, "depth");
+  check_intrinsics(k);
+  require(std::isfinite(scale) && scale > 0.f, "depth scale must be positive and finite (got " + std::to_string(scale) + ")");
+  require(depth.pixels() < (std::int64_t(1) << 31), "image too large");
+}
+/// Throws edgeplane::error unless a batch has one label image per frame.
+inline void check_batch_counts(std::size_t frames, std::size_t labels) {
+  require(frames == labels,
+          "segment_batch: " + std::to_string(frames) + " frames but " + std::to_string(labels) + " label images");
+}
 struct flag_candidates_kernel {
   const std::int32_t* parent;
   const std::int32_t* count;
@@ -170,9 +184,7 @@ class segmenter {
   template <class In>
   void segment_batch(const std::vector<image_view<const In>>& frames, float scale, const intrinsics& k,
                      const std::vector<image_view<std::uint16_t>>& labels, std::vector<segmentation_result>& results) {
-    detail::require(frames.size() == labels.size(), "segment_batch: " + std::to_string(frames.size()) +
-                                                        " frames but " + std::to_string(labels.size()) +
-                                                        " label images");
+    detail::check_batch_counts(frames.size(), labels.size());
     results.resize(frames.size());
     for (std::size_t i = 0; i < frames.size(); ++i) segment(frames[i], scale, k, labels[i], results[i]);
   }
@@ -294,14 +306,10 @@ class segmenter {
     out.planes.clear();
     out.times = {};
     out.candidates = out.valid_candidates = 0;
-    detail::check_view(depth_in, "depth");
+    detail::check_frame(depth_in, scale, k);
     detail::check_view(labels_out, "labels");
     detail::check_same_size(depth_in, labels_out, "depth", "labels");
-    detail::check_intrinsics(k);
-    detail::require(std::isfinite(scale) && scale > 0.f,
-                    "depth scale must be positive and finite (got " + std::to_string(scale) + ")");
     const int w = depth_in.width, h = depth_in.height;
-    detail::require(static_cast<std::int64_t>(w) * h < (std::int64_t(1) << 31), "image too large");
     if (w == 0 || h == 0) return;
     const std::int64_t n_full = static_cast<std::int64_t>(w) * h;
 

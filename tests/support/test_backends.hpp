@@ -3,9 +3,10 @@
 //
 // Every test is written once and instantiated per backend:
 //   TEST_CASE_TEMPLATE("...", B, EDGEPLANE_TEST_BACKENDS) { for (const B& b : variants<B>()) ... }
-// A CUDA backend is added by appending it to EDGEPLANE_TEST_BACKENDS (in a .cu test TU) and
-// giving it a variants<> specialisation; tests move data only through device_array, so they run
-// unchanged on device memory.
+// Besides the CPU backend they run on the device-path model (support/device_model.hpp: host memory,
+// but every branch the CUDA backend takes).  A CUDA backend is added by appending it to
+// EDGEPLANE_TEST_BACKENDS (in a .cu test TU) and giving it a variants<> specialisation; tests move
+// data only through device_array, so they run unchanged on device memory.
 #pragma once
 #include <doctest/doctest.h>
 
@@ -18,12 +19,15 @@
 #include "edgeplane/backend/cpu.hpp"
 #include "edgeplane/camera.hpp"
 #include "edgeplane/image.hpp"
+#include "support/device_model.hpp"
 
+// The CPU backend, and the device code paths run on the host (support/device_model.hpp).
 #ifndef EDGEPLANE_TEST_BACKENDS
-#define EDGEPLANE_TEST_BACKENDS edgeplane::cpu
+#define EDGEPLANE_TEST_BACKENDS edgeplane::cpu, edgeplane_test::device_model
 #endif
 
 TYPE_TO_STRING(edgeplane::cpu);
+TYPE_TO_STRING(edgeplane_test::device_model);
 
 namespace edgeplane_test {
 
@@ -39,6 +43,14 @@ inline std::vector<edgeplane::cpu> variants<edgeplane::cpu>() {
 }
 inline std::string variant_name(const edgeplane::cpu& b) {
   return b.execution == edgeplane::cpu::mode::serial ? "cpu/serial" : "cpu/parallel";
+}
+/// The device-path model runs its work items concurrently, and serially in reverse index order.
+template <>
+inline std::vector<device_model> variants<device_model>() {
+  return {device_model{device_model::order::parallel}, device_model{device_model::order::reversed}};
+}
+inline std::string variant_name(const device_model& b) {
+  return b.run == device_model::order::reversed ? "device_model/reversed" : "device_model/parallel";
 }
 
 /// An array in the backend's memory, filled from and read back into host vectors.

@@ -132,6 +132,28 @@ struct cuda {
     if (p) (void)cudaFree(p);
   }
 
+  /// Page-locked host memory (cudaMallocHost): uploads from it and downloads into it run
+  /// asynchronously and overlap with other streams' work.  edgeplane::pipeline holds its frames
+  /// in flight there.  Synchronous with the host.
+  void* allocate_host(std::size_t bytes) const {
+    void* p = nullptr;
+    detail::cuda_check(cudaMallocHost(&p, bytes == 0 ? 1 : bytes),
+                       ("cudaMallocHost of " + std::to_string(bytes) + " bytes").c_str());
+    return p;
+  }
+  /// Frees memory from allocate_host().  Never throws.
+  void deallocate_host(void* p) const noexcept {
+    if (p) (void)cudaFreeHost(p);
+  }
+  /// The device current on the calling thread; bind_thread() makes it current on another one:
+  /// edgeplane::pipeline's lane threads run on the device current where the pipeline was built.
+  int thread_binding() const {
+    int device = 0;
+    detail::cuda_check(cudaGetDevice(&device), "cudaGetDevice");
+    return device;
+  }
+  void bind_thread(int device) const { detail::cuda_check(cudaSetDevice(device), "cudaSetDevice"); }
+
   /// Device -> host.  Complete when it returns (waits for the stream: the host may read dst).
   void copy_to_host(void* dst, const void* src, std::size_t bytes) const {
     if (bytes == 0) return;
