@@ -19,15 +19,6 @@
 #define EDGEPLANE_INLINE inline
 #endif
 
-// Keeps a rarely taken slow path out of a hot loop (so the loop stays small and vectorized).
-#if defined(__CUDACC__)
-#define EDGEPLANE_NOINLINE __noinline__
-#elif defined(__GNUC__) || defined(__clang__)
-#define EDGEPLANE_NOINLINE __attribute__((noinline))
-#else
-#define EDGEPLANE_NOINLINE
-#endif
-
 // Host kernels whose inner loops are SIMD over pixels (the edge pass, smoothing, the depth
 // closing, moments, growth, the failed-candidate erosion) are compiled three times on x86-64 ELF
 // systems, for x86-64-v4 (AVX-512), x86-64-v3 (AVX2) and the baseline, and the loader picks the
@@ -39,12 +30,8 @@
 #if !defined(__CUDACC__) && !defined(EDGEPLANE_NO_TARGET_CLONES) && defined(__x86_64__) && defined(__ELF__) && \
     !defined(__AVX512F__) && ((defined(__clang__) && __clang_major__ >= 14) || (!defined(__clang__) && defined(__GNUC__) && __GNUC__ >= 11))
 #define EDGEPLANE_HOST_CLONES __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
-// A slow path kept out of line and cloned: a cloned function is called through its resolver,
-// never inlined, and Clang refuses noinline next to target_clones.
-#define EDGEPLANE_HOST_CLONES_NOINLINE EDGEPLANE_HOST_CLONES
 #else
 #define EDGEPLANE_HOST_CLONES
-#define EDGEPLANE_HOST_CLONES_NOINLINE EDGEPLANE_NOINLINE
 #endif
 
 // Device code asserts only in debug builds (never in release kernels).

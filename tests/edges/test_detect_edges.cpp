@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include "edgeplane/edges/detect_edges.hpp"
@@ -229,9 +231,27 @@ TEST_CASE("detect_edges: the 16-pixel row kernel gives the per-pixel kernel's ed
       for (int y = 0; y < h; ++y)
         std::copy_n(dense.begin() + static_cast<std::ptrdiff_t>(y) * w, w, z.begin() + static_cast<std::ptrdiff_t>(y) * pitch);
       const image_view<const float> zv{z.data(), w, h, pitch};
-      for (const auto& name : presets::preset_names()) {
+      // every preset, and two sets outside them: a straight-arm tolerance above the arc threshold
+      // (an arc-like arm can then also count as straight, which the curved test must reject),
+      // and short, loose arms (most pixels reach the finishing tests)
+      std::vector<std::pair<std::string, params>> sets;
+      for (const auto& name : presets::preset_names()) sets.emplace_back(name, preset(name));
+      params crossed = presets::thesis_full();
+      crossed.t_cue1 = 0.12f;
+      crossed.t_cue2 = 0.02f;
+      crossed.n_cue = 6;
+      sets.emplace_back("t_cue1 > t_cue2", crossed);
+      params loose = presets::kinect2();
+      loose.t_coe = 0.01f;
+      loose.t_coe_arm = 0.2f;
+      loose.n_coe = 3;
+      loose.n_ee = 3;
+      loose.t_ee = 0.999f;
+      sets.emplace_back("loose corners", loose);
+      for (const auto& set_of : sets) {  // (not a structured binding: clang 14 cannot capture one)
+        const std::string& name = set_of.first;
+        const params& p = set_of.second;
         CAPTURE(name);
-        const params p = preset(name);
         std::vector<std::uint8_t> rows(dense.size(), 0xee), pixels(dense.size(), 0xdd);
         detect_edges(cpu{}, zv, k, p, make_view(rows.data(), w, h));
         const detail::edge_set set = detail::make_edge_set(p);

@@ -335,7 +335,8 @@ void check_segmenter_inputs_match_cpu(const B& b) {
   }
   SUBCASE("one segmenter over frames of changing size") {
     ep::segmenter<B> gs(ep::presets::kinect2(), b);
-    for (const auto& [w, h] : {std::pair{256, 212}, std::pair{640, 480}, std::pair{320, 240}, std::pair{640, 480}}) {
+    for (const auto& size : {std::pair{256, 212}, std::pair{640, 480}, std::pair{320, 240}, std::pair{640, 480}}) {
+      const int w = size.first, h = size.second;  // (not a structured binding: clang 14 cannot capture one)
       CAPTURE(w);
       CAPTURE(h);
       const ep::test::rendered r = frame(sc.s, sc.pose, w, h, 11);

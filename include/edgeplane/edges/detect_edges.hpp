@@ -1,5 +1,6 @@
 // edgeplane: the edge detector, written once over direction and edge-type policies.
 #pragma once
+#include <bit>
 #include <cstdint>
 
 #include "edgeplane/backend/buffer.hpp"
@@ -244,8 +245,6 @@ struct all_edges_kernel {
     edges(x, y) = b;
   }
   EDGEPLANE_HD void operator()(int x, int y) const { run(x, y, 0xffffu); }
-  /// run(), called out of line (the row kernel's rare slow path).
-  EDGEPLANE_HOST_CLONES_NOINLINE EDGEPLANE_HD void run_some(int x, int y, unsigned tests) const { run(x, y, tests); }
 };
 
 /// all_edges_kernel over runs of Lanes pixels of one row (work item = row * chunks + chunk), for
@@ -256,8 +255,10 @@ struct all_edges_kernel {
 /// the corner's bend pre-test at c and the curved arc pre-test of both sides
 /// (detail::farther_than's sure rejection), in all four directions, each behind the neighbour
 /// counts its scalar test requires.  A test that its counts or its first condition reject cannot
-/// fire, so the scalar kernel runs only the others at that pixel (none, on a surface).  So the
-/// edge map is identical bit for bit.
+/// fire.  The tests they leave open (near creases and steps) are then finished for all lanes at
+/// once too (finish_along: the arm scans, the arc shape, the extrema's farther neighbours), again
+/// with the scalar tests' operations, the lanes in step and a lane's neighbours contiguous with
+/// the next lane's.  So the edge map is identical bit for bit.
 template <int Lanes>
 struct all_edges_rows_kernel {
   all_edges_kernel px;
@@ -347,6 +348,151 @@ struct all_edges_rows_kernel {
     }
   }
 
+  // ---- the open tests, finished for all lanes at once ------------------------------------------
+  // Where the pre-tests leave a test open, it is finished here lane by lane with exactly the float
+  // operations of edge_type's scalar test (the same points, the same expressions; a branch of the
+  // scalar code becomes a select between values computed the same way), so each lane's decision
+  // is the scalar test's.  Lanes whose bit is not open compute garbage from readable memory and
+  // are masked.  ok[l] is 0 or 1.
+
+  // c ? a : b without a branch (bits), so that loops whose values are computed either way (a
+  // division that may be by zero in the lanes it does not select) vectorize on every target.
+  EDGEPLANE_HD EDGEPLANE_INLINE static float select_f(bool c, float a, float b) {
+    const std::uint32_t m = 0u - static_cast<std::uint32_t>(c);
+    return std::bit_cast<float>((std::bit_cast<std::uint32_t>(a) & m) | (std::bit_cast<std::uint32_t>(b) & ~m));
+  }
+
+  // arm_within for every lane with ok[l] set: clears ok[l] where an inner point of the arm of m
+  // neighbours on side s lies beyond t * chord + noise[l] of the chord from c to the arm's end.
+  template <class Direction>
+  EDGEPLANE_HD EDGEPLANE_INLINE void arms_within(const float* c, std::ptrdiff_t step, int x0, int y, int s, int m,
+                                                 float t, const float* noise, unsigned* ok) const {
+    const projector pr = px.proj;
+    float cx[Lanes], cy[Lanes], cz[Lanes], ex[Lanes], ey[Lanes], ez[Lanes], bound[Lanes];
+    for (int l = 0; l < Lanes; ++l) {
+      const point3 p0 = at<Direction>(pr, c, step, x0 + l, y, l, 0), e = at<Direction>(pr, c, step, x0 + l, y, l, s * m);
+      cx[l] = p0.x;
+      cy[l] = p0.y;
+      cz[l] = p0.z;
+      ex[l] = e.x;
+      ey[l] = e.y;
+      ez[l] = e.z;
+      bound[l] = t * norm(e - p0) + noise[l];
+    }
+    for (int k = 1; k < m; ++k) {
+      unsigned alive = 0;
+      for (int l = 0; l < Lanes; ++l) {
+        const point3 p = at<Direction>(pr, c, step, x0 + l, y, l, s * k);
+        const point3 a{cx[l], cy[l], cz[l]}, ab = point3{ex[l], ey[l], ez[l]} - a, ap = p - a;
+        const float l2 = dot(ab, ab);
+        const point3 cr = cross(ap, ab);
+        const float num = dot(cr, cr), self = dot(ap, ap);
+        const float d2 = select_f(l2 <= 0.f, self, num / l2);  // = dist2_to_line(p, a, e)
+        ok[l] = ok[l] & static_cast<unsigned>(!(sqrtf(d2) > bound[l]));
+        alive |= ok[l];
+      }
+      if (!alive) return;
+    }
+  }
+
+  // farther_than(p, a, b, t, noise) for one lane, without branches: false where its shortcut says
+  // so (the exact expression is then false too), the exact expression elsewhere.
+  EDGEPLANE_HD EDGEPLANE_INLINE static bool farther_lane(point3 p, point3 a, point3 b, float t, float noise) {
+    const point3 ab = b - a, ap = p - a;
+    const float l2 = dot(ab, ab);
+    const point3 cr = cross(ap, ab);
+    const float num = dot(cr, cr), self = dot(ap, ap);
+    const float floor2 = t * t * l2 + noise * noise;
+    const bool sure_no = (t >= 0.f) & (noise >= 0.f) & (l2 >= 1e-12f) & (floor2 >= 1e-20f) & (num < 1e30f) &
+                         (num < l2 * floor2 * 0.9999f);
+    const float d2 = select_f(l2 <= 0.f, self, num / l2);
+    return !sure_no & (sqrtf(d2) > t * sqrtf(l2) + noise);
+  }
+  // sqrtf(dist2_to_line(p, a, b)), branch-free, the same operations.
+  EDGEPLANE_HD EDGEPLANE_INLINE static float dist_lane(point3 p, point3 a, point3 b) {
+    const point3 ab = b - a, ap = p - a;
+    const float l2 = dot(ab, ab);
+    const point3 cr = cross(ap, ab);
+    const float num = dot(cr, cr), self = dot(ap, ap);
+    return sqrtf(select_f(l2 <= 0.f, self, num / l2));
+  }
+
+  // Finishes the open tests along Direction (bits 4 D + j of maybe[l]) and ORs the edge bits into
+  // bits[l].  The jump pre-test is the whole jump test.
+  template <class Direction, int D>
+  EDGEPLANE_HD EDGEPLANE_INLINE void finish_along(const float* c, int x0, int y, std::ptrdiff_t pitch, const float* zc,
+                                                  const float* noise_co, const float* noise_cu, const unsigned* maybe,
+                                                  unsigned any, unsigned* bits) const {
+    const std::ptrdiff_t step = static_cast<std::ptrdiff_t>(Direction::dy) * pitch + Direction::dx;
+    const edge_set& s = px.set;
+    const projector pr = px.proj;
+    if (any & (1u << (4 * D)))
+      for (int l = 0; l < Lanes; ++l)
+        bits[l] |= ((maybe[l] >> (4 * D)) & 1u) * edge_type::jump::bit;
+    if (any & (2u << (4 * D))) {
+      const float t = s.extrema.t;
+      const int n = s.extrema.n;
+      unsigned nearer[Lanes], farther[Lanes];
+      for (int l = 0; l < Lanes; ++l) nearer[l] = farther[l] = (maybe[l] >> (4 * D + 1)) & 1u;
+      for (int k = 1; k <= n; ++k)
+        for (int l = 0; l < Lanes; ++l) {
+          const float z = zc[l], a = c[l - k * step], b = c[l + k * step];
+          nearer[l] &= static_cast<unsigned>((z < t * a) & (z < t * b));
+          farther[l] &= static_cast<unsigned>((z * t > a) & (z * t > b));
+        }
+      for (int l = 0; l < Lanes; ++l) bits[l] |= (nearer[l] | farther[l]) * edge_type::extrema::bit;
+    }
+    if (any & (4u << (4 * D))) {
+      const int n = s.corner.n, h = n / 2 > 0 ? n / 2 : 1;
+      unsigned ok[Lanes], ok_r[Lanes];
+      unsigned open = 0;
+      for (int l = 0; l < Lanes; ++l) {
+        const bool bend = farther_lane(at<Direction>(pr, c, step, x0 + l, y, l, 0),
+                                       at<Direction>(pr, c, step, x0 + l, y, l, -h),
+                                       at<Direction>(pr, c, step, x0 + l, y, l, h), s.corner.t_bend, noise_co[l]);
+        ok[l] = ((maybe[l] >> (4 * D + 2)) & 1u) & static_cast<unsigned>(bend);
+        open |= ok[l];
+      }
+      if (open) {
+        arms_within<Direction>(c, step, x0, y, -1, n, s.corner.t_arm, noise_co, ok);
+        for (int l = 0; l < Lanes; ++l) ok_r[l] = ok[l];
+        arms_within<Direction>(c, step, x0, y, +1, n, s.corner.t_arm, noise_co, ok_r);
+        for (int l = 0; l < Lanes; ++l) bits[l] |= ok_r[l] * edge_type::corner::bit;
+      }
+    }
+    if (any & (8u << (4 * D))) {
+      const edge_type::curved& cu = s.curved;
+      const int n = cu.n, q1 = n / 4 > 0 ? n / 4 : 1, mid = n / 2 > 0 ? n / 2 : 1, q3 = (3 * n) / 4;
+      unsigned arc[2][Lanes], straight[2][Lanes];
+      unsigned open = 0;
+      for (int side = 0; side < 2; ++side) {
+        const int sg = side == 0 ? -1 : 1;
+        for (int l = 0; l < Lanes; ++l) {  // arc_like(nb, sg, noise)
+          const int x = x0 + l;
+          const point3 p0 = at<Direction>(pr, c, step, x, y, l, 0), e = at<Direction>(pr, c, step, x, y, l, sg * n);
+          const point3 pm = at<Direction>(pr, c, step, x, y, l, sg * mid);
+          const bool far = farther_lane(pm, p0, e, cu.t_bend, noise_cu[l]);
+          const float dm = dist_lane(pm, p0, e);
+          const float d1 = dist_lane(at<Direction>(pr, c, step, x, y, l, sg * q1), p0, e);
+          const float d3 = dist_lane(at<Direction>(pr, c, step, x, y, l, sg * q3), p0, e);
+          arc[side][l] = ((maybe[l] >> (4 * D + 3)) & 1u) & static_cast<unsigned>(far & (d1 >= 0.6f * dm) & (d3 >= 0.6f * dm));
+          open |= arc[side][l];
+        }
+      }
+      if (open) {  // straight(nb, side) where either side is arc-like
+        for (int side = 0; side < 2; ++side) {
+          for (int l = 0; l < Lanes; ++l) straight[side][l] = arc[0][l] | arc[1][l];
+          arms_within<Direction>(c, step, x0, y, side == 0 ? -1 : 1, n, cu.t_straight, noise_cu, straight[side]);
+        }
+        for (int l = 0; l < Lanes; ++l) {
+          const unsigned fire = (arc[0][l] & straight[1][l] & (straight[0][l] ^ 1u)) |
+                                (arc[1][l] & straight[0][l] & (straight[1][l] ^ 1u));
+          bits[l] |= fire * edge_type::curved::bit;
+        }
+      }
+    }
+  }
+
   template <bool Checked>
   EDGEPLANE_HD EDGEPLANE_INLINE void maybe_all(const float* c, int x0, int y, std::ptrdiff_t pitch, const float* zc,
                                                const float* noise_co, const float* noise_cu, const std::uint8_t* cnt,
@@ -417,14 +563,16 @@ struct all_edges_rows_kernel {
     else
       maybe_all<true>(c, x0, y, pitch, zc, noise_co, noise_cu, cnt, n, maybe);
     std::uint8_t* e = &px.edges(x0, y);
-    for (int l = 0; l < Lanes; ++l) {
-      if (!(zc[l] > 0.f))
-        e[l] = edge_invalid;
-      else if (maybe[l])
-        px.run_some(x0 + l, y, maybe[l]);
-      else
-        e[l] = 0;
+    unsigned any = 0;
+    for (int l = 0; l < Lanes; ++l) any |= maybe[l];
+    unsigned bits[Lanes] = {};
+    if (any) {
+      finish_along<direction::horizontal, 0>(c, x0, y, pitch, zc, noise_co, noise_cu, maybe, any, bits);
+      finish_along<direction::vertical, 1>(c, x0, y, pitch, zc, noise_co, noise_cu, maybe, any, bits);
+      finish_along<direction::left_diagonal, 2>(c, x0, y, pitch, zc, noise_co, noise_cu, maybe, any, bits);
+      finish_along<direction::right_diagonal, 3>(c, x0, y, pitch, zc, noise_co, noise_cu, maybe, any, bits);
     }
+    for (int l = 0; l < Lanes; ++l) e[l] = static_cast<std::uint8_t>(zc[l] > 0.f ? bits[l] : static_cast<unsigned>(edge_invalid));
   }
 };
 
