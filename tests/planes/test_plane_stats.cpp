@@ -229,7 +229,7 @@ TEST_CASE("fixed_point_max_depth: hundreds of metres for real cameras, nothing f
 TEST_CASE_TEMPLATE("accumulate_moments: long runs (the host's 8-pixel lanes) give every slot and box of a plain loop", B,
                    EDGEPLANE_TEST_BACKENDS) {
   // Runs of one label far longer than 8 pixels, starting and ending at every offset of a chunk,
-  // with invalid depth inside runs, negative coordinates (left of and above the centre) and a
+  // with unlabelled pixels and invalid depth inside runs, negative coordinates (left of and above the centre) and a
   // width that is not a multiple of 8; candidate_image_labels with `above` drops the low ids.
   const int w = 157, h = 23, num = 5;
   const auto k = camera(w, h);
@@ -242,6 +242,7 @@ TEST_CASE_TEMPLATE("accumulate_moments: long runs (the host's 8-pixel lanes) giv
       const std::size_t i = static_cast<std::size_t>(y) * w + x;
       const int run = (x + 3 * y) / (17 + y % 13);  // runs of 17..29 pixels, shifted per row
       cand[i] = (run + y) % (num + 1);              // 0 = no label, also runs of no label
+      if ((x * 5 + y) % 23 == 0 || x % 37 == 36) cand[i] = 0;  // unlabelled pixels inside runs, at their ends
       if ((x * 7 + y * 3) % 41 == 0) depth[i] = 0.f;  // a hole inside a run
     }
   const auto proj = detail::make_projector(k);

@@ -129,11 +129,15 @@ EDGEPLANE_HD EDGEPLANE_INLINE std::int64_t to_fixed(float v) {
 #endif
 }
 
-/// One work item per row: accumulates the moments of consecutive pixels of one label locally and
-/// flushes them with atomic adds when the label changes (a row holds few runs, so few atomics).
-/// Sums are kept as uint64 (two's complement: wrapping, so the order of additions cannot matter,
-/// and the totals fit an int64 by fixed_point_max_depth).  On the host, runs of 8 pixels of the
-/// current label are summed lane by lane (vectorizable); the lanes are folded in at each flush.
+/// One work item per row: accumulates the moments of the pixels of one label locally and flushes
+/// them with atomic adds when another label begins (a row holds few labels, so few atomics).
+/// Unlabelled pixels (label 0) between pixels of one label do not end its run: a plane's
+/// scattered outliers or holes then cost no flush (the two threads of a small machine would
+/// otherwise take turns on the label's counters at every one).  The bounding box is that of the
+/// label's pixels in the run.  Sums are kept as uint64 (two's complement: wrapping, so the order of
+/// additions cannot matter, and the totals fit an int64 by fixed_point_max_depth).  On the host,
+/// runs of 8 pixels whose labels are the current one or 0 are summed lane by lane (vectorizable);
+/// the lanes are folded in at each flush.
 template <class Labels>
 struct moments_kernel {
   image_view<const float> depth;
@@ -177,15 +181,18 @@ struct moments_kernel {
     s[9] += pz * pz;
   }
 
-  // pixel x of the scalar path: flushes the run that ends before it when its label differs
-  EDGEPLANE_HD EDGEPLANE_INLINE void step(std::uint64_t* s, std::int32_t& cur, int& x0, std::int32_t l, int x,
+  // pixel x of label l of the scalar path: a label other than 0 and the current one flushes the
+  // current run (its pixels span x0 .. x1) and starts its own
+  EDGEPLANE_HD EDGEPLANE_INLINE void step(std::uint64_t* s, std::int32_t& cur, int& x0, int& x1, std::int32_t l, int x,
                                           int y) const {
+    if (l == 0) return;
     if (l != cur) {
-      flush(cur, s, x0, x - 1, y);
+      flush(cur, s, x0, x1, y);
       for (int k = 0; k < moment_slots; ++k) s[k] = 0;
       cur = l;
       x0 = x;
     }
+    x1 = x;
     if (l > 0) add(s, x, y);
   }
 
@@ -193,9 +200,9 @@ struct moments_kernel {
     const int y = static_cast<int>(row), w = depth.width;
     std::uint64_t s[moment_slots] = {};
     std::int32_t cur = 0;
-    int x0 = 0, x = 0;
+    int x0 = 0, x1 = 0, x = 0;
 #if !defined(__CUDA_ARCH__)
-    // Lane sums of the current run (slots 0..9; slot 10 counts whole chunks in s directly).
+    // Lane sums of the current run (slots 0..9; slot 10 counts its pixels in s directly).
     std::uint64_t a[10][lanes] = {};
     bool lanes_used = false;
     auto fold = [&] {
@@ -214,18 +221,25 @@ struct moments_kernel {
       } else {
         for (int l = 0; l < lanes; ++l) lab[l] = label_of(x + l, y);
       }
-      bool same = true;
-      for (int l = 0; l < lanes; ++l) same &= lab[l] == cur;
+      bool same = true;  // every pixel of the current label or unlabelled
+      unsigned any = 0;
+      for (int l = 0; l < lanes; ++l) {
+        same &= (lab[l] == cur) | (lab[l] == 0);
+        any |= static_cast<unsigned>(lab[l] != 0);
+      }
       if (same) {
-        if (cur <= 0) continue;
+        if (!any) continue;  // (then also when cur <= 0)
         const float* zr = &depth(x, y);
+        std::uint64_t count = 0;
         for (int l = 0; l < lanes; ++l) {
           const float z = zr[l];
-          const std::uint64_t m = static_cast<std::uint64_t>(0) - static_cast<std::uint64_t>(z > 0.f);
+          const std::uint64_t on = static_cast<std::uint64_t>(lab[l] == cur);
+          const std::uint64_t m = static_cast<std::uint64_t>(0) - (on & static_cast<std::uint64_t>(z > 0.f));
           const point3 p = proj(x + l, y, z);
           const std::uint64_t px = static_cast<std::uint64_t>(to_fixed(p.x)) & m,
                               py = static_cast<std::uint64_t>(to_fixed(p.y)) & m,
                               pz = static_cast<std::uint64_t>(to_fixed(p.z)) & m;
+          count += on;
           a[0][l] += m & 1u;
           a[1][l] += px;
           a[2][l] += py;
@@ -237,19 +251,24 @@ struct moments_kernel {
           a[8][l] += py * pz;
           a[9][l] += pz * pz;
         }
-        s[10] += lanes;
+        s[10] += count;
+        for (int l = lanes - 1; l >= 0; --l)
+          if (lab[l] != 0) {
+            x1 = x + l;
+            break;
+          }
         lanes_used = true;
         continue;
       }
       for (int l = 0; l < lanes; ++l) {
-        if (lab[l] != cur) fold();
-        step(s, cur, x0, lab[l], x + l, y);
+        if (lab[l] != 0 && lab[l] != cur) fold();
+        step(s, cur, x0, x1, lab[l], x + l, y);
       }
     }
     fold();
 #endif
-    for (; x < w; ++x) step(s, cur, x0, label_of(x, y), x, y);
-    flush(cur, s, x0, w - 1, y);
+    for (; x < w; ++x) step(s, cur, x0, x1, label_of(x, y), x, y);
+    flush(cur, s, x0, x1, y);
   }
 };
 
