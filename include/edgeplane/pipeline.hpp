@@ -12,15 +12,16 @@
 // Every frame's result is exactly what segmenter<Backend>::segment() gives for it (the segmenter
 // is deterministic, and a lane keeps nothing of one frame for the next but its scratch memory).
 #pragma once
+#include <algorithm>
 #include <concepts>
 #include <condition_variable>
-#include <new>
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
 #include <exception>
 #include <memory>
 #include <mutex>
+#include <new>
 #include <string>
 #include <thread>
 #include <type_traits>
@@ -95,12 +96,16 @@ class pipeline {
   /// 0 = twice the lanes, so that every lane has a frame queued behind the one it runs.
   /// Throws edgeplane::error for invalid thresholds, no lanes, or a capacity below the lanes.
   pipeline(const params& p, const std::vector<Backend>& lanes, std::size_t capacity = 0)
-      : slots_(capacity == 0 ? 2 * lanes.size() : capacity) {
+      : slots_(std::min(capacity == 0 ? 2 * lanes.size() : capacity, max_capacity + 1)) {
+    // (a capacity above the limit is refused below without allocating its slots)
     validate(p);
-    detail::require(!lanes.empty(), "pipeline: at least one lane is needed");
-    detail::require(slots_.size() >= lanes.size(), "pipeline: capacity " + std::to_string(slots_.size()) +
-                                                       " is smaller than the " + std::to_string(lanes.size()) +
-                                                       " lanes");
+    detail::require(!lanes.empty() && lanes.size() <= max_lanes,
+                    "pipeline: " + std::to_string(lanes.size()) + " lanes (1 to " + std::to_string(max_lanes) +
+                        " allowed)");
+    const std::size_t want = capacity == 0 ? 2 * lanes.size() : capacity;
+    detail::require(want >= lanes.size() && want <= max_capacity,
+                    "pipeline: capacity " + std::to_string(want) + " (from the " +
+                        std::to_string(lanes.size()) + " lanes to " + std::to_string(max_capacity) + " allowed)");
     for (const Backend& b : lanes) lanes_.push_back(std::make_unique<segmenter<Backend>>(p, b));
     start();
   }
@@ -108,6 +113,8 @@ class pipeline {
   /// through the other constructor, or the lanes share one stream and do not overlap).
   pipeline(const params& p, int lanes, const Backend& b = Backend{}, std::size_t capacity = 0)
       : pipeline(p, std::vector<Backend>(lanes > 0 ? static_cast<std::size_t>(lanes) : 0, b), capacity) {}
+
+  static constexpr std::size_t max_lanes = 256, max_capacity = 4096;
 
   pipeline(const pipeline&) = delete;
   pipeline& operator=(const pipeline&) = delete;
@@ -157,7 +164,8 @@ class pipeline {
     s.depth.reserve(lanes_.front()->backend(), bytes);
     s.labels.reserve(lanes_.front()->backend(), bytes / sizeof(In) * sizeof(std::uint16_t));
     auto* dst = static_cast<unsigned char*>(s.depth.data());
-    for (int y = 0; y < depth.height; ++y) std::memcpy(dst + y * row, &depth(0, y), row);
+    if (bytes > 0)
+      for (int y = 0; y < depth.height; ++y) std::memcpy(dst + y * row, &depth(0, y), row);
     s.is_float = std::is_same_v<In, float>;
     s.scale = metres_per_unit;
     s.k = k;
@@ -196,8 +204,9 @@ class pipeline {
     std::exception_ptr error = s->error;
     if (!error) {
       const auto* src = static_cast<const std::uint16_t*>(s->labels.data());
-      for (int y = 0; y < s->height; ++y)
-        std::memcpy(&labels(0, y), src + static_cast<std::size_t>(y) * s->width, sizeof(std::uint16_t) * s->width);
+      if (s->width > 0)
+        for (int y = 0; y < s->height; ++y)
+          std::memcpy(&labels(0, y), src + static_cast<std::size_t>(y) * s->width, sizeof(std::uint16_t) * s->width);
       out.planes.assign(s->result.planes.begin(), s->result.planes.end());
       out.times = s->result.times;
       out.candidates = s->result.candidates;

@@ -8,6 +8,7 @@
 #include <stdexcept>
 #include <string>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include "edgeplane/edgeplane.hpp"
@@ -261,6 +262,9 @@ TEST_CASE("pipeline: unusable arguments throw edgeplane::error and change nothin
   const test_frame& f = frames[0];
   CHECK_THROWS_AS(ep::pipeline<ep::cpu>(ep::presets::kinect2(), 0), ep::error);
   CHECK_THROWS_AS(ep::pipeline<ep::cpu>(ep::presets::kinect2(), 3, ep::cpu{}, 2), ep::error);
+  CHECK_THROWS_AS(ep::pipeline<ep::cpu>(ep::presets::kinect2(), -4), ep::error);
+  CHECK_THROWS_AS(ep::pipeline<ep::cpu>(ep::presets::kinect2(), 100000), ep::error);
+  CHECK_THROWS_AS(ep::pipeline<ep::cpu>(ep::presets::kinect2(), 1, ep::cpu{}, std::size_t(1) << 62), ep::error);
   ep::params bad_p = ep::presets::kinect2();
   bad_p.t_size = 0;
   CHECK_THROWS_AS(ep::pipeline<ep::cpu>(bad_p, 1), ep::error);
@@ -334,4 +338,25 @@ TEST_CASE("pipeline: destroyed with frames in flight, it stops without waiting f
   }  // the lanes finish the frames they run; the rest are dropped; threads joined, memory freed
   CHECK(log.host_blocks == 0);
   CHECK(log.bound_threads == 2);
+}
+
+TEST_CASE("pipeline: empty, 1x1 and one-row frames give what segment() gives") {
+  ep::segmenter<ep::cpu> ref(ep::presets::thesis_full());
+  ep::pipeline<ep::cpu> pl(ep::presets::thesis_full(), 2);
+  const ep::intrinsics k{365.f, 365.f, 0.f, 0.f};
+  const std::vector<std::pair<int, int>> sizes = {{0, 5}, {5, 0}, {0, 0}, {1, 1}, {300, 1}, {1, 200}};
+  std::vector<std::vector<std::uint16_t>> depth;
+  for (const auto& size : sizes)
+    depth.emplace_back(static_cast<std::size_t>(size.first) * size.second, std::uint16_t(1500));
+  for (std::size_t i = 0; i < sizes.size(); ++i) {
+    const int w = sizes[i].first, h = sizes[i].second;
+    CHECK(pl.submit(ep::make_view<const std::uint16_t>(depth[i].empty() ? nullptr : depth[i].data(), w, h), 0.001f, k) == i);
+    std::vector<std::uint16_t> got(depth[i].size(), 0xbeef), want(depth[i].size(), 0xbeef);
+    ep::segmentation_result r;
+    CHECK(pl.retrieve(ep::make_view(got.empty() ? nullptr : got.data(), w, h), r) == i);
+    const auto wr = ref.segment(ep::make_view<const std::uint16_t>(depth[i].empty() ? nullptr : depth[i].data(), w, h),
+                                0.001f, k, ep::make_view(want.empty() ? nullptr : want.data(), w, h));
+    CHECK(got == want);
+    CHECK(r.planes.size() == wr.planes.size());
+  }
 }
