@@ -1,6 +1,8 @@
 // edgeplane: small 3-D geometry used inside kernels (host and device).
 #pragma once
+#include <bit>
 #include <cmath>
+#include <cstdint>
 
 #include "edgeplane/camera.hpp"
 #include "edgeplane/config.hpp"
@@ -36,13 +38,20 @@ struct noise_sigma {
 };
 inline noise_sigma make_noise(const noise_model& m) { return {m.sigma0, m.sigma2}; }
 
-/// Squared distance of p from the line through a and b (a != b); |p - a|^2 when a == b.
+/// c ? a : b without a branch (by bits), so that a loop whose values are computed either way (a
+/// division that may be by zero in the lanes it does not select) vectorizes on every target.
+EDGEPLANE_HD EDGEPLANE_INLINE float select_f(bool c, float a, float b) {
+  const std::uint32_t m = 0u - static_cast<std::uint32_t>(c);
+  return std::bit_cast<float>((std::bit_cast<std::uint32_t>(a) & m) | (std::bit_cast<std::uint32_t>(b) & ~m));
+}
+
+/// Squared distance of p from the line through a and b (a != b); |p - a|^2 when a == b.  Without
+/// a branch (the host's 16-pixel edge tests call it lane by lane).
 EDGEPLANE_HD EDGEPLANE_INLINE float dist2_to_line(point3 p, point3 a, point3 b) {
   const point3 ab = b - a, ap = p - a;
   const float l2 = dot(ab, ab);
-  if (l2 <= 0.f) return dot(ap, ap);
   const point3 c = cross(ap, ab);
-  return dot(c, c) / l2;
+  return select_f(l2 <= 0.f, dot(ap, ap), dot(c, c) / l2);
 }
 
 /// sqrtf(dist2_to_line(p, a, b)) > t * norm(b - a) + noise, evaluated with exactly the float

@@ -1,6 +1,5 @@
 // edgeplane: the edge detector, written once over direction and edge-type policies.
 #pragma once
-#include <bit>
 #include <cstdint>
 
 #include "edgeplane/backend/buffer.hpp"
@@ -355,13 +354,6 @@ struct all_edges_rows_kernel {
   // is the scalar test's.  Lanes whose bit is not open compute garbage from readable memory and
   // are masked.  ok[l] is 0 or 1.
 
-  // c ? a : b without a branch (bits), so that loops whose values are computed either way (a
-  // division that may be by zero in the lanes it does not select) vectorize on every target.
-  EDGEPLANE_HD EDGEPLANE_INLINE static float select_f(bool c, float a, float b) {
-    const std::uint32_t m = 0u - static_cast<std::uint32_t>(c);
-    return std::bit_cast<float>((std::bit_cast<std::uint32_t>(a) & m) | (std::bit_cast<std::uint32_t>(b) & ~m));
-  }
-
   // arm_within for every lane with ok[l] set: clears ok[l] where an inner point of the arm of m
   // neighbours on side s lies beyond t * chord + noise[l] of the chord from c to the arm's end.
   template <class Direction>
@@ -382,12 +374,8 @@ struct all_edges_rows_kernel {
     for (int k = 1; k < m; ++k) {
       unsigned alive = 0;
       for (int l = 0; l < Lanes; ++l) {
-        const point3 p = at<Direction>(pr, c, step, x0 + l, y, l, s * k);
-        const point3 a{cx[l], cy[l], cz[l]}, ab = point3{ex[l], ey[l], ez[l]} - a, ap = p - a;
-        const float l2 = dot(ab, ab);
-        const point3 cr = cross(ap, ab);
-        const float num = dot(cr, cr), self = dot(ap, ap);
-        const float d2 = select_f(l2 <= 0.f, self, num / l2);  // = dist2_to_line(p, a, e)
+        const float d2 = dist2_to_line(at<Direction>(pr, c, step, x0 + l, y, l, s * k), point3{cx[l], cy[l], cz[l]},
+                                       point3{ex[l], ey[l], ez[l]});
         ok[l] = ok[l] & static_cast<unsigned>(!(sqrtf(d2) > bound[l]));
         alive |= ok[l];
       }
@@ -405,16 +393,8 @@ struct all_edges_rows_kernel {
     const float floor2 = t * t * l2 + noise * noise;
     const bool sure_no = (t >= 0.f) & (noise >= 0.f) & (l2 >= 1e-12f) & (floor2 >= 1e-20f) & (num < 1e30f) &
                          (num < l2 * floor2 * 0.9999f);
-    const float d2 = select_f(l2 <= 0.f, self, num / l2);
+    const float d2 = select_f(l2 <= 0.f, self, num / l2);  // dist2_to_line's operations
     return !sure_no & (sqrtf(d2) > t * sqrtf(l2) + noise);
-  }
-  // sqrtf(dist2_to_line(p, a, b)), branch-free, the same operations.
-  EDGEPLANE_HD EDGEPLANE_INLINE static float dist_lane(point3 p, point3 a, point3 b) {
-    const point3 ab = b - a, ap = p - a;
-    const float l2 = dot(ab, ab);
-    const point3 cr = cross(ap, ab);
-    const float num = dot(cr, cr), self = dot(ap, ap);
-    return sqrtf(select_f(l2 <= 0.f, self, num / l2));
   }
 
   // Finishes the open tests along Direction (bits 4 D + j of maybe[l]) and ORs the edge bits into
@@ -472,9 +452,9 @@ struct all_edges_rows_kernel {
           const point3 p0 = at<Direction>(pr, c, step, x, y, l, 0), e = at<Direction>(pr, c, step, x, y, l, sg * n);
           const point3 pm = at<Direction>(pr, c, step, x, y, l, sg * mid);
           const bool far = farther_lane(pm, p0, e, cu.t_bend, noise_cu[l]);
-          const float dm = dist_lane(pm, p0, e);
-          const float d1 = dist_lane(at<Direction>(pr, c, step, x, y, l, sg * q1), p0, e);
-          const float d3 = dist_lane(at<Direction>(pr, c, step, x, y, l, sg * q3), p0, e);
+          const float dm = sqrtf(dist2_to_line(pm, p0, e));
+          const float d1 = sqrtf(dist2_to_line(at<Direction>(pr, c, step, x, y, l, sg * q1), p0, e));
+          const float d3 = sqrtf(dist2_to_line(at<Direction>(pr, c, step, x, y, l, sg * q3), p0, e));
           arc[side][l] = ((maybe[l] >> (4 * D + 3)) & 1u) & static_cast<unsigned>(far & (d1 >= 0.6f * dm) & (d3 >= 0.6f * dm));
           open |= arc[side][l];
         }
