@@ -106,25 +106,38 @@ struct flag_candidates_kernel {
     flags[i] = (parent[i] == static_cast<std::int32_t>(i) && count[i] >= t_size) ? 1 : 0;
   }
 };
-/// cand[i] = offset + (1-based index of i's root among the kept roots) for pixels of kept
-/// components; pixels of dropped components get 0; pixels that took no part get 0, or keep their
-/// value when `only_members` (a split round rewrites only the pixels it split).
+/// cand[i] = 1-based index of i's root among the kept roots for pixels of kept components, 0 for
+/// all other pixels.
 struct write_candidates_kernel {
   const std::int32_t* parent;
   const std::int32_t* flags;
   const std::int32_t* scan;
-  std::int32_t offset;
-  bool only_members;
   std::int32_t* cand;
   EDGEPLANE_HD void operator()(std::int64_t i) const {
     const std::int32_t r = parent[i];
-    if (r >= 0 && flags[r]) {
-      cand[i] = offset + scan[r];
-    } else if (!only_members || r >= 0) {
-      cand[i] = 0;
-    }
+    cand[i] = r >= 0 && flags[r] ? scan[r] : 0;
   }
 };
+/// A split round's ids over a rectangle of the candidate image (`cand`, a view of it), whose
+/// pixel (x, y) is element y * cand.width + x of the union-find: pixels of kept components get
+/// offset + the 1-based index of their root among the kept roots, pixels of dropped components 0;
+/// pixels that took no part keep their value.
+struct write_members_kernel {
+  const std::int32_t* parent;
+  const std::int32_t* flags;
+  const std::int32_t* scan;
+  std::int32_t offset;
+  image_view<std::int32_t> cand;
+  EDGEPLANE_HD void operator()(int x, int y) const {
+    const std::int32_t r = parent[static_cast<std::int64_t>(y) * cand.width + x];
+    if (r >= 0) cand(x, y) = flags[r] ? offset + scan[r] : 0;
+  }
+};
+/// The rectangle [x0, x1] x [y0, y1] of view v as a view of its own (same pitch).
+template <class T>
+image_view<T> sub_view(image_view<T> v, int x0, int y0, int x1, int y1) {
+  return image_view<T>{v.data + static_cast<std::ptrdiff_t>(y0) * v.pitch + x0, x1 - x0 + 1, y1 - y0 + 1, v.pitch};
+}
 }  // namespace detail
 
 template <class Backend = cpu>
@@ -263,13 +276,12 @@ class segmenter {
                               host_bbox_.data() + static_cast<std::size_t>(c) * 4);
   }
 
-  // Numbers the union-find components of at least t_size elements offset+1, offset+2, ... in
-  // raster order of their roots and writes the ids into cand_ (only over pixels that took part
-  // when `only_members`, else everywhere: 0 for pixels of no kept component).  Returns how many.
-  std::int32_t number_components(std::int64_t n, std::int32_t offset, bool only_members) {
+  // Numbers the union-find components of at least t_size elements 1, 2, ... in raster order of
+  // their roots and writes the ids into cand_ (0 for pixels of no kept component).  Returns how
+  // many.
+  std::int32_t number_components(std::int64_t n) {
     const std::int32_t k = flag_components(n, p_.t_size);
-    b_.for_each_index(n, detail::write_candidates_kernel{parent_.data(), flags_.data(), scan_.data(), offset,
-                                                         only_members, cand_.data()});
+    b_.for_each_index(n, detail::write_candidates_kernel{parent_.data(), flags_.data(), scan_.data(), cand_.data()});
     return k;
   }
   // Flags (flags_) the roots of union-find components of at least min_size elements and numbers
@@ -291,11 +303,13 @@ class segmenter {
 
   // Fits candidates first+1..num from their pixels; those of 1..first keep their fits (a split
   // round writes its new ids only over pixels of retired candidates, so the others are unchanged).
-  void refit_candidates(image_view<const float> z, const intrinsics& kp, std::int32_t num, std::int32_t first = 0) {
+  // Candidates first+1..num lie in rows [row_begin, row_end) (row_end < 0: to the last).
+  void refit_candidates(image_view<const float> z, const intrinsics& kp, std::int32_t num, std::int32_t first = 0,
+                        int row_begin = 0, int row_end = -1) {
     moments_.resize(static_cast<std::size_t>(num + 1) * moment_slots);
     bbox_.resize(static_cast<std::size_t>(num + 1) * 4);
     accumulate_moments(b_, z, kp, detail::candidate_image_labels{view(cand_.data(), pw_, ph_), first}, num,
-                       moments_.data(), bbox_.data());
+                       moments_.data(), bbox_.data(), row_begin, row_end);
     download_fits(num, fits_, first);
   }
 
@@ -390,8 +404,7 @@ class segmenter {
     connected_components(b_, n, covered, n,
                          detail::grid4_adjacency<detail::covered_active>{z, covered, p_.t_je, p_.t_je_quad, slope_inv_f},
                          parent_.data());
-    b_.memset(cand_.data(), 0, sizeof(std::int32_t) * n);
-    std::int32_t num_cand = number_components(n, 0, false);
+    std::int32_t num_cand = number_components(n);
     out.candidates = num_cand;
     b_.synchronize();
     out.times.candidates = ms_since(t);
@@ -403,27 +416,42 @@ class segmenter {
     for (int c = 0; c < num_cand; ++c) status_[c] = is_plane(fits_[c], p_) ? 1 : 0;
     for (int round = 1; round <= p_.split_rounds; ++round) {
       host_failed_.assign(static_cast<std::size_t>(num_cand + 1), 0);
-      bool any = false;
+      // The failed candidates' pixels all lie in the union [x0, x1] x [y0, y1] of their bounding
+      // boxes: the round works on that rectangle only.
+      int x0 = pw_, y0 = ph_, x1 = -1, y1 = -1;
       for (int c = 0; c < num_cand; ++c)
         if (status_[c] == 0) {
           host_failed_[c + 1] = 1;
           status_[c] = 2;
-          any = true;
+          const std::int32_t* bb = host_bbox_.data() + static_cast<std::size_t>(c + 1) * 4;
+          x0 = std::min(x0, bb[0]);
+          y0 = std::min(y0, bb[1]);
+          x1 = std::max(x1, bb[2]);
+          y1 = std::max(y1, bb[3]);
         }
-      if (!any) break;
+      if (x1 < x0 || y1 < y0) break;  // none failed
       failed_.resize(host_failed_.size());
       b_.copy_from_host(failed_.data(), host_failed_.data(), host_failed_.size());
-      // the failed candidates eroded (detail::eroded_failed_active, computed separably into the
-      // free coverage buffer), then split by the union-find
-      erode_failed(b_, image_view<const std::int32_t>(cand), failed_.data(), round * p_.split_erode, cov_l);
+      // The failed candidates eroded (detail::eroded_failed_active, computed separably into the
+      // free coverage buffer, dense over the rectangle), then split by the union-find, whose
+      // elements are the rectangle's pixels in raster order (so roots, and the new ids, come in
+      // the raster order of the whole image).  A pixel whose erosion window is one failed
+      // candidate has that window inside the candidate's box, so the rectangle changes nothing.
+      const auto cand_r = detail::sub_view(cand, x0, y0, x1, y1);
+      const auto z_r = detail::sub_view(image_view<const float>(z), x0, y0, x1, y1);
+      const std::int64_t n_r = static_cast<std::int64_t>(cand_r.width) * cand_r.height;
+      erode_failed(b_, image_view<const std::int32_t>(cand_r), failed_.data(), round * p_.split_erode,
+                   view(cov_l_.data(), cand_r.width, cand_r.height));
       const detail::mask_bit_active eroded{cov_l_.data(), 2};
-      connected_components(b_, n, eroded, n,
-                           detail::grid4_adjacency<detail::mask_bit_active>{z, eroded, p_.t_je, p_.t_je_quad,
+      connected_components(b_, n_r, eroded, n_r,
+                           detail::grid4_adjacency<detail::mask_bit_active>{z_r, eroded, p_.t_je, p_.t_je_quad,
                                                                             slope_inv_f},
                            parent_.data());
-      const std::int32_t added = number_components(n, num_cand, true);
+      const std::int32_t added = flag_components(n_r, p_.t_size);
+      detail::for_each_pixel(b_, cand_r.width, cand_r.height,
+                             detail::write_members_kernel{parent_.data(), flags_.data(), scan_.data(), num_cand, cand_r});
       if (added == 0) break;
-      refit_candidates(z, kp, num_cand + added, num_cand);
+      refit_candidates(z, kp, num_cand + added, num_cand, y0, y1 + 1);
       num_cand += added;
       for (int c = num_cand - added; c < num_cand; ++c) status_.push_back(is_plane(fits_[c], p_) ? 1 : 0);
     }

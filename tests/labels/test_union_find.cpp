@@ -3,6 +3,7 @@
 #include <doctest/doctest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <numeric>
@@ -422,7 +423,79 @@ TEST_CASE_TEMPLATE("grid4_adjacency: components equal a serial union-find on ran
                              detail::grid4_adjacency<detail::covered_active>{z.cview(w, h), active, 0.06f, 0.f, 0.f},
                              parent.data());
         CHECK(parent.host() == want);  // flattened: every element holds its root
+        // The same depth as a rectangle of a larger image (pitch > width, other depths around it,
+        // which would join or split differently if read): the same components.
+        const int W = w + 7, H = h + 3, ox = 3, oy = 2;
+        std::vector<float> big(static_cast<std::size_t>(W) * H);
+        for (float& v : big) v = 1.f + 0.04f * static_cast<float>(rng.next_u32(4));
+        for (int y = 0; y < h; ++y)
+          for (int x = 0; x < w; ++x)
+            big[static_cast<std::size_t>(y + oy) * W + x + ox] = depth[static_cast<std::size_t>(y) * w + x];
+        device_array<float, B> zb(b, big);
+        device_array<std::int32_t, B> parent_r(b, n, -7);
+        const image_view<const float> rect{zb.data() + static_cast<std::ptrdiff_t>(oy) * W + ox, w, h, W};
+        connected_components(b, static_cast<std::int64_t>(n), active, static_cast<std::int64_t>(n),
+                             detail::grid4_adjacency<detail::covered_active>{rect, active, 0.06f, 0.f, 0.f},
+                             parent_r.data());
+        CHECK(parent_r.host() == want);
       }
+    }
+  }
+}
+
+TEST_CASE_TEMPLATE("erode_failed: on the failed candidates' rectangle it marks what the whole image's erosion marks",
+                   B, EDGEPLANE_TEST_BACKENDS) {
+  // The segmenter's split rounds erode only the union of the failed candidates' bounding boxes.
+  // Failed ids (1 and 3) lie in [x0, x1] x [y0, y1], some touching its sides and corners; the
+  // other ids (2, 4, 5) lie anywhere, inside and outside it.
+  const int w = 150, h = 50, x0 = 37, y0 = 9, x1 = 121, y1 = 40;
+  lcg_noise rng(41);
+  std::vector<std::int32_t> cand(static_cast<std::size_t>(w) * h, 0);
+  auto paint = [&](int ax, int ay, int bx, int by, std::int32_t id) {
+    for (int y = std::max(ay, 0); y <= std::min(by, h - 1); ++y)
+      for (int x = std::max(ax, 0); x <= std::min(bx, w - 1); ++x) cand[static_cast<std::size_t>(y) * w + x] = id;
+  };
+  for (int k = 0; k < 60; ++k) {  // other ids anywhere
+    const int ax = static_cast<int>(rng.next_u32(w)), ay = static_cast<int>(rng.next_u32(h));
+    paint(ax, ay, ax + 2 + static_cast<int>(rng.next_u32(30)), ay + 2 + static_cast<int>(rng.next_u32(15)),
+          static_cast<std::int32_t>(std::array<int, 3>{2, 4, 5}[rng.next_u32(3)]));
+  }
+  for (int k = 0; k < 40; ++k) {  // failed ids inside the rectangle, clipped to it
+    const int ax = x0 + static_cast<int>(rng.next_u32(x1 - x0)), ay = y0 + static_cast<int>(rng.next_u32(y1 - y0));
+    const int bx = std::min(x1, ax + 3 + static_cast<int>(rng.next_u32(25)));
+    const int by = std::min(y1, ay + 3 + static_cast<int>(rng.next_u32(12)));
+    paint(ax, ay, bx, by, rng.next_u32(2) ? 1 : 3);
+  }
+  paint(x0, y0, x0 + 12, y0 + 8, 1);  // corners of the rectangle
+  paint(x1 - 12, y1 - 8, x1, y1, 3);
+  const std::vector<std::uint8_t> failed = {0, 1, 0, 1, 0, 0};
+  const int rw = x1 - x0 + 1, rh = y1 - y0 + 1;
+  for (const B& b : variants<B>()) {
+    CAPTURE(variant_name(b));
+    device_array<std::int32_t, B> c(b, cand);
+    device_array<std::uint8_t, B> f(b, failed), whole(b, cand.size(), 0xAA), part(b, static_cast<std::size_t>(rw) * rh, 0x55);
+    for (int r = 1; r <= 4; ++r) {
+      CAPTURE(r);
+      erode_failed(b, c.cview(w, h), f.data(), r, whole.view(w, h));
+      const image_view<const std::int32_t> rect{c.data() + static_cast<std::ptrdiff_t>(y0) * w + x0, rw, rh, w};
+      erode_failed(b, rect, f.data(), r, part.view(rw, rh));
+      const auto a = whole.host(), p = part.host();
+      int differ = 0, marked = 0, outside = 0;
+      for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+          const bool m = (a[static_cast<std::size_t>(y) * w + x] & 2) != 0;
+          const bool in = x >= x0 && x <= x1 && y >= y0 && y <= y1;
+          if (!in) {
+            outside += m ? 1 : 0;
+            continue;
+          }
+          const bool q = (p[static_cast<std::size_t>(y - y0) * rw + x - x0] & 2) != 0;
+          differ += m != q ? 1 : 0;
+          marked += m ? 1 : 0;
+        }
+      CHECK(outside == 0);  // the premise: failed pixels only inside
+      CHECK(differ == 0);
+      CHECK(marked > 100);  // not vacuous
     }
   }
 }

@@ -119,6 +119,49 @@ TEST_CASE_TEMPLATE("accumulate_moments: two labels, invalid pixels, unlabelled p
   }
 }
 
+TEST_CASE_TEMPLATE("accumulate_moments: a row range reads only its rows, with the whole image's coordinates", B,
+                   EDGEPLANE_TEST_BACKENDS) {
+  // Two tilted planes; rows [9, 23) hold all of label 2 and part of label 1.  The range must give
+  // exactly the slots and boxes of the whole image with the labels outside the range erased (so
+  // the points keep their pixel coordinates: a range that shifted them would move the centroid).
+  const int w = 41, h = 30, y0 = 9, y1 = 23;
+  const auto k = camera(w, h);
+  const vec3 n1 = normalized({0.2, 0.1, -1.0}), n2 = normalized({-0.6, 0.0, -1.0});
+  std::vector<float> depth(static_cast<std::size_t>(w) * h);
+  std::vector<std::uint16_t> labels(depth.size(), 0), cut(depth.size(), 0);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const std::size_t i = static_cast<std::size_t>(y) * w + x;
+      const bool l2 = std::abs(x - 28) + std::abs(y - 15) <= 6;  // rows 9..21
+      depth[i] = plane_depth(k, x, y, l2 ? n2 : n1, l2 ? 2.5 : 1.8);
+      if ((x + 3 * y) % 13 == 0) depth[i] = 0.f;
+      labels[i] = l2 ? 2 : (x < 20 ? 1 : 0);
+      cut[i] = y >= y0 && y < y1 ? labels[i] : 0;
+    }
+  for (const B& b : variants<B>()) {
+    CAPTURE(variant_name(b));
+    device_array<float, B> z(b, depth);
+    device_array<std::uint16_t, B> l(b, labels);
+    auto run = [&](int rb, int re) {
+      device_array<std::uint64_t, B> m(b, 3 * moment_slots, 777);
+      device_array<std::int32_t, B> bb(b, 12, 777);
+      accumulate_moments(b, z.cview(w, h), k, detail::image_labels{l.cview(w, h)}, 2, m.data(), bb.data(), rb, re);
+      return moments_result{m.host(), bb.host()};
+    };
+    const moments_result want = moments(b, depth, cut, w, h, 2), all = moments(b, depth, labels, w, h, 2);
+    const moments_result got = run(y0, y1);
+    CHECK(got.m == want.m);
+    CHECK(got.bbox == want.bbox);
+    CHECK(got.fit(1).bbox == std::array<int, 4>{0, y0, 19, y1 - 1});
+    CHECK(got.fit(2).pixels == all.fit(2).pixels);
+    CHECK((got.fit(2).centroid - all.fit(2).centroid).norm() < 1e-12);  // label 2 whole: the same points
+    CHECK(run(0, -1).m == all.m);                                         // the default: every row
+    CHECK(run(-3, h + 5).m == all.m);                                     // clamped to the image
+    const moments_result none = run(5, 5);                                // an empty range: nothing
+    CHECK(std::all_of(none.m.begin(), none.m.end(), [](std::uint64_t v) { return v == 0; }));
+  }
+}
+
 TEST_CASE_TEMPLATE("accumulate_moments: fixed-point sums are identical between serial and parallel runs", B,
                    EDGEPLANE_TEST_BACKENDS) {
   const int w = 160, h = 120, num = 7;  // more than 64 rows: the parallel path really runs in parallel

@@ -281,7 +281,7 @@ struct same_label_adjacency {
     const std::int64_t i = static_cast<std::int64_t>(y) * labels.width + x;
     const std::uint16_t l = labels.data[i];
     if (l == 0) return 0;
-    return grid4_pairs(x, y, i, labels.width, labels.height, a, b, [&](std::int64_t j) { return labels.data[j] == l; });
+    return grid4_pairs(x, y, i, labels.width, labels.height, a, b, [&](std::int64_t j, bool) { return labels.data[j] == l; });
   }
 };
 /// out[i] = the 1-based region id of i's region when kept (flags[root] = 1) and at most

@@ -210,16 +210,17 @@ struct all_active {
 };
 
 /// The union pairs of pixel (x, y) (flat index i) of a dense w x h image with its right and lower
-/// neighbours j for which joins(j) holds (at most 2); returns how many.
+/// neighbours j for which joins(j, below) holds (below: j is the lower neighbour; at most 2 pairs);
+/// returns how many.
 template <class Joins>
 EDGEPLANE_HD EDGEPLANE_INLINE int grid4_pairs(int x, int y, std::int64_t i, int w, int h, std::int32_t* a,
                                               std::int32_t* b, Joins joins) {
   int n = 0;
-  if (x + 1 < w && joins(i + 1)) {
+  if (x + 1 < w && joins(i + 1, false)) {
     a[n] = static_cast<std::int32_t>(i);
     b[n++] = static_cast<std::int32_t>(i + 1);
   }
-  if (y + 1 < h && joins(i + w)) {
+  if (y + 1 < h && joins(i + w, true)) {
     a[n] = static_cast<std::int32_t>(i);
     b[n++] = static_cast<std::int32_t>(i + w);
   }
@@ -229,7 +230,9 @@ EDGEPLANE_HD EDGEPLANE_INLINE int grid4_pairs(int x, int y, std::int64_t i, int 
 /// 4-connectivity on an image: pixel i is joined to its right and lower neighbours when both are
 /// active and their depths differ by no more than t_je + t_je_quad z^2 + slope * z * inv_f (the
 /// last term: `slope` pixel footprints, which admits surfaces seen at grazing angles), so a gap in
-/// the edge map does not join surfaces at different depths.
+/// the edge map does not join surfaces at different depths.  The elements (and `active`) are the
+/// dense w x h pixels of `depth`'s size; `depth` itself may be a view with any pitch (a
+/// rectangle of a larger image).
 template <class Active>
 struct grid4_adjacency {
   image_view<const float> depth;
@@ -242,11 +245,14 @@ struct grid4_adjacency {
   EDGEPLANE_HD int grid_width() const { return depth.width; }
   EDGEPLANE_HD int grid_height() const { return depth.height; }
   EDGEPLANE_HD int operator()(int x, int y, std::int32_t* a, std::int32_t* b) const {
-    const std::int64_t i = static_cast<std::int64_t>(y) * depth.width + x;  // dense image
+    const std::int64_t i = static_cast<std::int64_t>(y) * depth.width + x;  // dense elements
     if (!active(i)) return 0;
-    const float z = depth.data[i];
-    return grid4_pairs(x, y, i, depth.width, depth.height, a, b,
-                       [&](std::int64_t j) { return active(j) && compatible(z, depth.data[j]); });
+    const float* zp = &depth(x, y);
+    const float z = *zp;
+    // the neighbour j is i + 1 (right) or i + width (below): its depth is 1 or a pitch further
+    return grid4_pairs(x, y, i, depth.width, depth.height, a, b, [&](std::int64_t j, bool below) {
+      return active(j) && compatible(z, zp[below ? depth.pitch : 1]);
+    });
   }
 };
 

@@ -146,6 +146,7 @@ struct moments_kernel {
   std::int32_t num_labels;
   std::uint64_t* moments;  // (num_labels + 1) * moment_slots; slot block of label L at L * moment_slots
   std::int32_t* bbox;      // (num_labels + 1) * 4
+  int row0 = 0;            // work item k is row row0 + k
 
   static constexpr int lanes = 8;
 
@@ -197,7 +198,7 @@ struct moments_kernel {
   }
 
   EDGEPLANE_HOST_CLONES EDGEPLANE_HD void operator()(std::int64_t row) const {
-    const int y = static_cast<int>(row), w = depth.width;
+    const int y = row0 + static_cast<int>(row), w = depth.width;
     std::uint64_t s[moment_slots] = {};
     std::int32_t cur = 0;
     int x0 = 0, x1 = 0, x = 0;
@@ -325,16 +326,21 @@ inline plane_fit fit_plane(const std::uint64_t* m, const std::int32_t* bb = null
 
 /// Accumulates the moments and bounding boxes of labels 1..num_labels (label_of(x, y) gives
 /// pixel (x, y)'s label) into backend buffers `moments` ((num_labels + 1) * moment_slots) and `bbox`
-/// ((num_labels + 1) * 4), which this call clears first.  Asynchronous on device backends.
-/// Precondition: valid depths are at most fixed_point_max_depth(k, w, h) (the segmenter's depth
-/// conversion ensures it), so that the fixed-point sums are exact.
+/// ((num_labels + 1) * 4), which this call clears first.  Only rows [row_begin, row_end) are read
+/// (row_end < 0: to the last row): for labels known to lie in those rows.  Asynchronous on device
+/// backends.  Precondition: valid depths are at most fixed_point_max_depth(k, w, h) (the
+/// segmenter's depth conversion ensures it), so that the fixed-point sums are exact.
 template <class Backend, class Labels>
 void accumulate_moments(const Backend& b, image_view<const float> depth, const intrinsics& k, Labels label_of,
-                        std::int32_t num_labels, std::uint64_t* moments, std::int32_t* bbox) {
+                        std::int32_t num_labels, std::uint64_t* moments, std::int32_t* bbox, int row_begin = 0,
+                        int row_end = -1) {
+  if (row_end < 0 || row_end > depth.height) row_end = depth.height;
+  if (row_begin < 0) row_begin = 0;
   b.memset(moments, 0, sizeof(std::uint64_t) * moment_slots * (num_labels + 1));
   b.for_each_index(num_labels + 1, detail::bbox_init_kernel{bbox});
-  b.for_each_index(depth.height, detail::moments_kernel<Labels>{depth, label_of, detail::make_projector(k),
-                                                                num_labels, moments, bbox});
+  if (row_end > row_begin)
+    b.for_each_index(row_end - row_begin, detail::moments_kernel<Labels>{depth, label_of, detail::make_projector(k),
+                                                                         num_labels, moments, bbox, row_begin});
 }
 
 }  // namespace edgeplane
