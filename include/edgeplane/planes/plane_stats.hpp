@@ -129,6 +129,15 @@ EDGEPLANE_HD EDGEPLANE_INLINE std::int64_t to_fixed(float v) {
 #endif
 }
 
+/// The product of two fixed-point coordinates (as their uint64 two's complement bits), modulo
+/// 2^64.  fixed_point_max_depth keeps every coordinate within +-2^31, so the product of their low
+/// 32 bits as signed integers is the exact product: one 32 x 32 -> 64-bit multiply, which vector
+/// units have (a full 64-bit multiply they have not, or only slowly).
+EDGEPLANE_HD EDGEPLANE_INLINE std::uint64_t mul_fixed(std::uint64_t a, std::uint64_t b) {
+  return static_cast<std::uint64_t>(static_cast<std::int64_t>(static_cast<std::int32_t>(a)) *
+                                    static_cast<std::int32_t>(b));
+}
+
 /// One work item per row: accumulates the moments of the pixels of one label locally and flushes
 /// them with atomic adds when another label begins (a row holds few labels, so few atomics).
 /// Unlabelled pixels (label 0) between pixels of one label do not end its run: a plane's
@@ -174,12 +183,12 @@ struct moments_kernel {
     s[1] += px;
     s[2] += py;
     s[3] += pz;
-    s[4] += px * px;
-    s[5] += px * py;
-    s[6] += px * pz;
-    s[7] += py * py;
-    s[8] += py * pz;
-    s[9] += pz * pz;
+    s[4] += mul_fixed(px, px);
+    s[5] += mul_fixed(px, py);
+    s[6] += mul_fixed(px, pz);
+    s[7] += mul_fixed(py, py);
+    s[8] += mul_fixed(py, pz);
+    s[9] += mul_fixed(pz, pz);
   }
 
   // pixel x of label l of the scalar path: a label other than 0 and the current one flushes the
@@ -245,12 +254,12 @@ struct moments_kernel {
           a[1][l] += px;
           a[2][l] += py;
           a[3][l] += pz;
-          a[4][l] += px * px;
-          a[5][l] += px * py;
-          a[6][l] += px * pz;
-          a[7][l] += py * py;
-          a[8][l] += py * pz;
-          a[9][l] += pz * pz;
+          a[4][l] += mul_fixed(px, px);
+          a[5][l] += mul_fixed(px, py);
+          a[6][l] += mul_fixed(px, pz);
+          a[7][l] += mul_fixed(py, py);
+          a[8][l] += mul_fixed(py, pz);
+          a[9][l] += mul_fixed(pz, pz);
         }
         s[10] += count;
         for (int l = lanes - 1; l >= 0; --l)
