@@ -1,5 +1,6 @@
 // edgeplane: the edge detector, written once over direction and edge-type policies.
 #pragma once
+#include <cstddef>
 #include <cstdint>
 
 #include "edgeplane/backend/buffer.hpp"
@@ -121,12 +122,26 @@ struct interior_columns_kernel {
 /// diagonal, right diagonal; s = 0 the left side (-dx, -dy), 1 the right side) holds how many
 /// consecutive valid pixels follow the pixel on that side, at most r (0..r, r <= 255), stopping
 /// at the image border.  The horizontal planes: one work item per row, a running count.
+/// With xs and ys given, it also writes the X and Y of every pixel's back-projected point (the
+/// projector's operations, so the same floats) into those planes, laid out like `depth` (its
+/// pitch), for the host's row runs of the edge pass.
 struct valid_runs_rows_kernel {
   image_view<const float> depth;
   std::uint8_t* runs;
   int r;
+  projector proj{};
+  float* xs = nullptr;
+  float* ys = nullptr;
   EDGEPLANE_HOST_CLONES EDGEPLANE_HD void operator()(std::int64_t row) const {
     const int y = static_cast<int>(row), w = depth.width;
+    if (xs != nullptr) {
+      const std::ptrdiff_t o = static_cast<std::ptrdiff_t>(y) * depth.pitch;
+      for (int x = 0; x < w; ++x) {
+        const point3 p = proj(x, y, depth.data[o + x]);
+        xs[o + x] = p.x;
+        ys[o + x] = p.y;
+      }
+    }
     const std::int64_t n = static_cast<std::int64_t>(w) * depth.height, o = static_cast<std::int64_t>(y) * w;
     std::uint8_t* left = runs + o;
     std::uint8_t* right = runs + n + o;
@@ -212,6 +227,10 @@ struct all_edges_kernel {
   edge_set set;
   int reach;
   const std::uint8_t* runs = nullptr;  // 8 dense planes of valid-neighbour counts, or null
+  // X and Y of every pixel's back-projected point, laid out like depth (the host's row runs need
+  // them, with runs)
+  const float* xs = nullptr;
+  const float* ys = nullptr;
 
   template <class Direction, int D>
   EDGEPLANE_HD EDGEPLANE_INLINE std::uint8_t along(int x, int y, bool interior, unsigned tests) const {
@@ -275,12 +294,19 @@ struct all_edges_rows_kernel {
            (num < l2 * floor2 * 0.9999f);
   }
 
-  // neighbour k (signed: k < 0 on the left side) of the lane-l pixel x, back-projected as
-  // neighbourhood does
-  template <class Direction>
-  EDGEPLANE_HD EDGEPLANE_INLINE static point3 at(projector pr, const float* c, std::ptrdiff_t step, int x, int y,
-                                                 int l, int k) {
-    return pr(x + k * Direction::dx, y + k * Direction::dy, c[l + k * step]);
+  // The lanes' pixels: depth, and the X and Y of their back-projected points (valid_runs_rows_kernel),
+  // at the same offsets.  c[i] is the depth i elements from lane 0's pixel.
+  struct lane_points {
+    const float* z;
+    const float* x;
+    const float* y;
+    EDGEPLANE_HD EDGEPLANE_INLINE float operator[](std::ptrdiff_t i) const { return z[i]; }
+  };
+  // neighbour k (signed: k < 0 on the left side, `step` elements apart) of lane l's pixel,
+  // back-projected as neighbourhood does (the planes hold the projector's results)
+  EDGEPLANE_HD EDGEPLANE_INLINE static point3 at(const lane_points& c, std::ptrdiff_t step, int l, int k) {
+    const std::ptrdiff_t i = l + k * step;
+    return {c.x[i], c.y[i], c.z[i]};
   }
 
   // ORs into maybe[l] the bit 4 D + j of every test j along Direction that lane l's neighbour
@@ -289,14 +315,13 @@ struct all_edges_rows_kernel {
   // since every condition on them is masked by the counts the scalar test checks first).
   // Checked = false: every lane is valid with all its counts at reach (no masks needed).
   template <class Direction, int D, bool Checked>
-  EDGEPLANE_HD EDGEPLANE_INLINE void maybe_along(const float* c, int x0, int y, std::ptrdiff_t pitch,
+  EDGEPLANE_HD EDGEPLANE_INLINE void maybe_along(const lane_points& c, std::ptrdiff_t pitch,
                                                  const float* zc, const float* noise_co, const float* noise_cu,
                                                  const std::uint8_t* cl, const std::uint8_t* cr,
                                                  unsigned* maybe) const {
     constexpr int dx = Direction::dx, dy = Direction::dy;
     const std::ptrdiff_t step = static_cast<std::ptrdiff_t>(dy) * pitch + dx;
     const edge_set& s = px.set;
-    const projector pr = px.proj;
     if (s.use_jump) {
       // The whole jump test, as edge_type::jump computes it, without a select on floats (which
       // g++ does not vectorize): a missing side's step is -1 there, so it never jumps, and the
@@ -326,9 +351,9 @@ struct all_edges_rows_kernel {
       const int n = s.corner.n, h = n / 2 > 0 ? n / 2 : 1;
       const float t = s.corner.t_bend;
       for (int l = 0; l < Lanes; ++l) {
-        const bool bend = !surely_not_farther(at<Direction>(pr, c, step, x0 + l, y, l, 0),
-                                              at<Direction>(pr, c, step, x0 + l, y, l, -h),
-                                              at<Direction>(pr, c, step, x0 + l, y, l, h), t, noise_co[l]);
+        const bool bend = !surely_not_farther(at(c, step, l, 0),
+                                              at(c, step, l, -h),
+                                              at(c, step, l, h), t, noise_co[l]);
         maybe[l] |= static_cast<unsigned>((!Checked || ((cl[l] >= n) & (cr[l] >= n))) & bend) << (4 * D + 2);
       }
     }
@@ -336,10 +361,9 @@ struct all_edges_rows_kernel {
       const int n = s.curved.n, mid = n / 2 > 0 ? n / 2 : 1;
       const float t = s.curved.t_bend;
       for (int l = 0; l < Lanes; ++l) {
-        const int x = x0 + l;
-        const point3 p = at<Direction>(pr, c, step, x, y, l, 0);
-        const point3 ml = at<Direction>(pr, c, step, x, y, l, -mid), el = at<Direction>(pr, c, step, x, y, l, -n);
-        const point3 mr = at<Direction>(pr, c, step, x, y, l, mid), er = at<Direction>(pr, c, step, x, y, l, n);
+        const point3 p = at(c, step, l, 0);
+        const point3 ml = at(c, step, l, -mid), el = at(c, step, l, -n);
+        const point3 mr = at(c, step, l, mid), er = at(c, step, l, n);
         const bool no_l = surely_not_farther(ml, p, el, t, noise_cu[l]);
         const bool no_r = surely_not_farther(mr, p, er, t, noise_cu[l]);
         maybe[l] |= static_cast<unsigned>((!Checked || ((cl[l] >= n) & (cr[l] >= n))) & !(no_l & no_r)) << (4 * D + 3);
@@ -357,12 +381,11 @@ struct all_edges_rows_kernel {
   // arm_within for every lane with ok[l] set: clears ok[l] where an inner point of the arm of m
   // neighbours on side s lies beyond t * chord + noise[l] of the chord from c to the arm's end.
   template <class Direction>
-  EDGEPLANE_HD EDGEPLANE_INLINE void arms_within(const float* c, std::ptrdiff_t step, int x0, int y, int s, int m,
+  EDGEPLANE_HD EDGEPLANE_INLINE void arms_within(const lane_points& c, std::ptrdiff_t step, int s, int m,
                                                  float t, const float* noise, unsigned* ok) const {
-    const projector pr = px.proj;
     float cx[Lanes], cy[Lanes], cz[Lanes], ex[Lanes], ey[Lanes], ez[Lanes], bound[Lanes];
     for (int l = 0; l < Lanes; ++l) {
-      const point3 p0 = at<Direction>(pr, c, step, x0 + l, y, l, 0), e = at<Direction>(pr, c, step, x0 + l, y, l, s * m);
+      const point3 p0 = at(c, step, l, 0), e = at(c, step, l, s * m);
       cx[l] = p0.x;
       cy[l] = p0.y;
       cz[l] = p0.z;
@@ -374,7 +397,7 @@ struct all_edges_rows_kernel {
     for (int k = 1; k < m; ++k) {
       unsigned alive = 0;
       for (int l = 0; l < Lanes; ++l) {
-        const float d2 = dist2_to_line(at<Direction>(pr, c, step, x0 + l, y, l, s * k), point3{cx[l], cy[l], cz[l]},
+        const float d2 = dist2_to_line(at(c, step, l, s * k), point3{cx[l], cy[l], cz[l]},
                                        point3{ex[l], ey[l], ez[l]});
         ok[l] = ok[l] & static_cast<unsigned>(!(sqrtf(d2) > bound[l]));
         alive |= ok[l];
@@ -400,12 +423,11 @@ struct all_edges_rows_kernel {
   // Finishes the open tests along Direction (bits 4 D + j of maybe[l]) and ORs the edge bits into
   // bits[l].  The jump pre-test is the whole jump test.
   template <class Direction, int D>
-  EDGEPLANE_HD EDGEPLANE_INLINE void finish_along(const float* c, int x0, int y, std::ptrdiff_t pitch, const float* zc,
+  EDGEPLANE_HD EDGEPLANE_INLINE void finish_along(const lane_points& c, std::ptrdiff_t pitch, const float* zc,
                                                   const float* noise_co, const float* noise_cu, const unsigned* maybe,
                                                   unsigned any, unsigned* bits) const {
     const std::ptrdiff_t step = static_cast<std::ptrdiff_t>(Direction::dy) * pitch + Direction::dx;
     const edge_set& s = px.set;
-    const projector pr = px.proj;
     if (any & (1u << (4 * D)))
       for (int l = 0; l < Lanes; ++l)
         bits[l] |= ((maybe[l] >> (4 * D)) & 1u) * edge_type::jump::bit;
@@ -427,16 +449,16 @@ struct all_edges_rows_kernel {
       unsigned ok[Lanes], ok_r[Lanes];
       unsigned open = 0;
       for (int l = 0; l < Lanes; ++l) {
-        const bool bend = farther_lane(at<Direction>(pr, c, step, x0 + l, y, l, 0),
-                                       at<Direction>(pr, c, step, x0 + l, y, l, -h),
-                                       at<Direction>(pr, c, step, x0 + l, y, l, h), s.corner.t_bend, noise_co[l]);
+        const bool bend = farther_lane(at(c, step, l, 0),
+                                       at(c, step, l, -h),
+                                       at(c, step, l, h), s.corner.t_bend, noise_co[l]);
         ok[l] = ((maybe[l] >> (4 * D + 2)) & 1u) & static_cast<unsigned>(bend);
         open |= ok[l];
       }
       if (open) {
-        arms_within<Direction>(c, step, x0, y, -1, n, s.corner.t_arm, noise_co, ok);
+        arms_within<Direction>(c, step, -1, n, s.corner.t_arm, noise_co, ok);
         for (int l = 0; l < Lanes; ++l) ok_r[l] = ok[l];
-        arms_within<Direction>(c, step, x0, y, +1, n, s.corner.t_arm, noise_co, ok_r);
+        arms_within<Direction>(c, step, +1, n, s.corner.t_arm, noise_co, ok_r);
         for (int l = 0; l < Lanes; ++l) bits[l] |= ok_r[l] * edge_type::corner::bit;
       }
     }
@@ -448,13 +470,12 @@ struct all_edges_rows_kernel {
       for (int side = 0; side < 2; ++side) {
         const int sg = side == 0 ? -1 : 1;
         for (int l = 0; l < Lanes; ++l) {  // arc_like(nb, sg, noise)
-          const int x = x0 + l;
-          const point3 p0 = at<Direction>(pr, c, step, x, y, l, 0), e = at<Direction>(pr, c, step, x, y, l, sg * n);
-          const point3 pm = at<Direction>(pr, c, step, x, y, l, sg * mid);
+          const point3 p0 = at(c, step, l, 0), e = at(c, step, l, sg * n);
+          const point3 pm = at(c, step, l, sg * mid);
           const bool far = farther_lane(pm, p0, e, cu.t_bend, noise_cu[l]);
           const float dm = sqrtf(dist2_to_line(pm, p0, e));
-          const float d1 = sqrtf(dist2_to_line(at<Direction>(pr, c, step, x, y, l, sg * q1), p0, e));
-          const float d3 = sqrtf(dist2_to_line(at<Direction>(pr, c, step, x, y, l, sg * q3), p0, e));
+          const float d1 = sqrtf(dist2_to_line(at(c, step, l, sg * q1), p0, e));
+          const float d3 = sqrtf(dist2_to_line(at(c, step, l, sg * q3), p0, e));
           arc[side][l] = ((maybe[l] >> (4 * D + 3)) & 1u) & static_cast<unsigned>(far & (d1 >= 0.6f * dm) & (d3 >= 0.6f * dm));
           open |= arc[side][l];
         }
@@ -462,7 +483,7 @@ struct all_edges_rows_kernel {
       if (open) {  // straight(nb, side) where either side is arc-like
         for (int side = 0; side < 2; ++side) {
           for (int l = 0; l < Lanes; ++l) straight[side][l] = arc[0][l] | arc[1][l];
-          arms_within<Direction>(c, step, x0, y, side == 0 ? -1 : 1, n, cu.t_straight, noise_cu, straight[side]);
+          arms_within<Direction>(c, step, side == 0 ? -1 : 1, n, cu.t_straight, noise_cu, straight[side]);
         }
         for (int l = 0; l < Lanes; ++l) {
           const unsigned fire = (arc[0][l] & straight[1][l] & (straight[0][l] ^ 1u)) |
@@ -474,15 +495,15 @@ struct all_edges_rows_kernel {
   }
 
   template <bool Checked>
-  EDGEPLANE_HD EDGEPLANE_INLINE void maybe_all(const float* c, int x0, int y, std::ptrdiff_t pitch, const float* zc,
+  EDGEPLANE_HD EDGEPLANE_INLINE void maybe_all(const lane_points& c, std::ptrdiff_t pitch, const float* zc,
                                                const float* noise_co, const float* noise_cu, const std::uint8_t* cnt,
                                                std::int64_t n, unsigned* maybe) const {
-    maybe_along<direction::horizontal, 0, Checked>(c, x0, y, pitch, zc, noise_co, noise_cu, cnt, cnt + n, maybe);
-    maybe_along<direction::vertical, 1, Checked>(c, x0, y, pitch, zc, noise_co, noise_cu, cnt + 2 * n, cnt + 3 * n,
+    maybe_along<direction::horizontal, 0, Checked>(c, pitch, zc, noise_co, noise_cu, cnt, cnt + n, maybe);
+    maybe_along<direction::vertical, 1, Checked>(c, pitch, zc, noise_co, noise_cu, cnt + 2 * n, cnt + 3 * n,
                                                  maybe);
-    maybe_along<direction::left_diagonal, 2, Checked>(c, x0, y, pitch, zc, noise_co, noise_cu, cnt + 4 * n,
+    maybe_along<direction::left_diagonal, 2, Checked>(c, pitch, zc, noise_co, noise_cu, cnt + 4 * n,
                                                       cnt + 5 * n, maybe);
-    maybe_along<direction::right_diagonal, 3, Checked>(c, x0, y, pitch, zc, noise_co, noise_cu, cnt + 6 * n,
+    maybe_along<direction::right_diagonal, 3, Checked>(c, pitch, zc, noise_co, noise_cu, cnt + 6 * n,
                                                        cnt + 7 * n, maybe);
   }
 
@@ -499,8 +520,9 @@ struct all_edges_rows_kernel {
       return;
     }
     std::ptrdiff_t pitch = px.depth.pitch;
-    const float* c = &px.depth(x0, y);
-    float tile[(2 * max_tile_reach + 1) * (Lanes + 2 * max_tile_reach)];
+    lane_points c{px.depth.data + first, px.xs + first, px.ys + first};
+    constexpr int tile_size = (2 * max_tile_reach + 1) * (Lanes + 2 * max_tile_reach);
+    float tile[3][tile_size];
     if (first < reach_span || first + Lanes - 1 + reach_span > static_cast<std::int64_t>(h - 1) * pitch + w - 1) {
       // Near the top or bottom (or a view's first or last columns): the lanes' reads would leave
       // the view's rows, so they read a copy of the window instead, rows y - r .. y + r and columns
@@ -508,15 +530,20 @@ struct all_edges_rows_kernel {
       // same values at the same coordinates, and the counts still mask everything outside.
       const int tp = Lanes + 2 * r;
       for (int dy = -r; dy <= r; ++dy) {
-        float* t = tile + static_cast<std::ptrdiff_t>(dy + r) * tp;
+        const std::ptrdiff_t o = static_cast<std::ptrdiff_t>(dy + r) * tp;
         const int v = y + dy;
         for (int j = 0; j < tp; ++j) {
           const int u = x0 - r + j;
-          t[j] = v >= 0 && v < h && u >= 0 && u < w ? px.depth(u, v) : 0.f;
+          const bool in = v >= 0 && v < h && u >= 0 && u < w;
+          const std::ptrdiff_t i = in ? static_cast<std::ptrdiff_t>(v) * px.depth.pitch + u : 0;
+          tile[0][o + j] = in ? px.depth.data[i] : 0.f;
+          tile[1][o + j] = in ? px.xs[i] : 0.f;
+          tile[2][o + j] = in ? px.ys[i] : 0.f;
         }
       }
       pitch = tp;
-      c = tile + static_cast<std::ptrdiff_t>(r) * tp + r;
+      const std::ptrdiff_t o = static_cast<std::ptrdiff_t>(r) * tp + r;
+      c = lane_points{tile[0] + o, tile[1] + o, tile[2] + o};
     }
     const std::int64_t n = static_cast<std::int64_t>(w) * h, i0 = static_cast<std::int64_t>(y) * w + x0;
     float zc[Lanes], noise_co[Lanes], noise_cu[Lanes];
@@ -539,18 +566,18 @@ struct all_edges_rows_kernel {
       full = diff == 0;
     }
     if (full)
-      maybe_all<false>(c, x0, y, pitch, zc, noise_co, noise_cu, cnt, n, maybe);
+      maybe_all<false>(c, pitch, zc, noise_co, noise_cu, cnt, n, maybe);
     else
-      maybe_all<true>(c, x0, y, pitch, zc, noise_co, noise_cu, cnt, n, maybe);
+      maybe_all<true>(c, pitch, zc, noise_co, noise_cu, cnt, n, maybe);
     std::uint8_t* e = &px.edges(x0, y);
     unsigned any = 0;
     for (int l = 0; l < Lanes; ++l) any |= maybe[l];
     unsigned bits[Lanes] = {};
     if (any) {
-      finish_along<direction::horizontal, 0>(c, x0, y, pitch, zc, noise_co, noise_cu, maybe, any, bits);
-      finish_along<direction::vertical, 1>(c, x0, y, pitch, zc, noise_co, noise_cu, maybe, any, bits);
-      finish_along<direction::left_diagonal, 2>(c, x0, y, pitch, zc, noise_co, noise_cu, maybe, any, bits);
-      finish_along<direction::right_diagonal, 3>(c, x0, y, pitch, zc, noise_co, noise_cu, maybe, any, bits);
+      finish_along<direction::horizontal, 0>(c, pitch, zc, noise_co, noise_cu, maybe, any, bits);
+      finish_along<direction::vertical, 1>(c, pitch, zc, noise_co, noise_cu, maybe, any, bits);
+      finish_along<direction::left_diagonal, 2>(c, pitch, zc, noise_co, noise_cu, maybe, any, bits);
+      finish_along<direction::right_diagonal, 3>(c, pitch, zc, noise_co, noise_cu, maybe, any, bits);
     }
     for (int l = 0; l < Lanes; ++l) e[l] = static_cast<std::uint8_t>(zc[l] > 0.f ? bits[l] : static_cast<unsigned>(edge_invalid));
   }
@@ -651,15 +678,25 @@ void detect_edge(const Backend& b, image_view<const float> depth, const intrinsi
                          detail::edge_kernel<Direction, EdgeType>{depth, edges, detail::make_projector(k), edge});
 }
 
+/// Host scratch of detect_edges for a depth view of w x h with row pitch `pitch` (elements): the
+/// valid-neighbour counts (8 w x h bytes) and the back-projected X and Y planes (floats laid out
+/// like the depth view).
+inline std::size_t edge_scratch_bytes(int w, int h, std::ptrdiff_t pitch) {
+  if (w <= 0 || h <= 0) return 0;
+  const std::size_t span = static_cast<std::size_t>(h - 1) * static_cast<std::size_t>(pitch) + static_cast<std::size_t>(w);
+  const std::size_t counts = static_cast<std::size_t>(8) * w * h;
+  return (counts + 63) / 64 * 64 + 2 * span * sizeof(float);
+}
+
 /// All enabled edge types over the four directions in one pass: writes every pixel of `edges`
-/// (edge_bits; edge_invalid where depth is invalid).  `runs`: scratch of 8 w x h bytes in the
-/// backend's memory for the valid-neighbour counts, used by host backends (empty: allocated per
-/// call).  Device backends mark, in `edges` itself, the pixels whose whole neighbourhood is
-/// valid, and count the neighbours of the others in the edge pass.  Asynchronous on device
-/// backends.
+/// (edge_bits; edge_invalid where depth is invalid).  `scratch`: edge_scratch_bytes(w, h,
+/// depth.pitch) bytes of the backend's memory, 64-byte aligned, used by host backends (null:
+/// allocated per call) for the valid-neighbour counts and the back-projected points.  Device
+/// backends mark, in `edges` itself, the pixels whose whole neighbourhood is valid, and count
+/// the neighbours of the others in the edge pass.  Asynchronous on device backends.
 template <class Backend>
 void detect_edges(const Backend& b, image_view<const float> depth, const intrinsics& k, const params& p,
-                  image_view<std::uint8_t> edges, std::uint8_t* runs = nullptr) {
+                  image_view<std::uint8_t> edges, std::uint8_t* scratch = nullptr) {
   detail::check_intrinsics(k);
   detail::check_same_size(depth, edges, "depth", "edges");
   const detail::edge_set set = detail::make_edge_set(p);
@@ -669,15 +706,20 @@ void detect_edges(const Backend& b, image_view<const float> depth, const intrins
   detail::all_edges_kernel px{depth, edges, detail::make_projector(k), set, reach};
   buffer<std::uint8_t, Backend> own;  // lives until the edge pass is done
   if constexpr (detail::row_lanes<Backend> > 1) {
-    if (runs == nullptr) {
+    if (scratch == nullptr) {
       own = buffer<std::uint8_t, Backend>(b);
-      own.resize(static_cast<std::size_t>(8) * w * h);
-      runs = own.data();
+      own.resize(edge_scratch_bytes(w, h, depth.pitch));
+      scratch = own.data();
     }
+    std::uint8_t* runs = scratch;
+    float* xs = reinterpret_cast<float*>(scratch + (static_cast<std::size_t>(8) * w * h + 63) / 64 * 64);
+    float* ys = xs + (static_cast<std::size_t>(h - 1) * static_cast<std::size_t>(depth.pitch) + static_cast<std::size_t>(w));
     constexpr int band = 32;
-    b.for_each_index(h, detail::valid_runs_rows_kernel{depth, runs, reach});
+    b.for_each_index(h, detail::valid_runs_rows_kernel{depth, runs, reach, px.proj, xs, ys});
     b.for_each_index((h + band - 1) / band, detail::valid_runs_bands_kernel{depth, runs, reach, band});
     px.runs = runs;
+    px.xs = xs;
+    px.ys = ys;
   } else {
     b.for_each_index(h, detail::interior_rows_kernel{depth, edges, reach});
     b.for_each_index(w, detail::interior_columns_kernel{edges, reach});
