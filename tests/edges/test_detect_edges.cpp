@@ -286,12 +286,16 @@ TEST_CASE("valid_runs kernels count each pixel's valid neighbours on all eight s
   for (int y = 0; y < 30; ++y) z[static_cast<std::size_t>(y) * w + 50] = 0.f;
   const auto zv = make_view<const float>(z.data(), w, h);
   const int dxs[4] = {1, 0, 1, -1}, dys[4] = {0, 1, 1, 1};  // horizontal, vertical, left and right diagonal
-  for (const int r : {1, 5, 16}) {
+  for (const int r : {1, 5, 16, 32}) {
     CAPTURE(r);
-    std::vector<std::uint8_t> runs(static_cast<std::size_t>(8) * w * h, 0xab);
+    std::vector<std::uint8_t> runs(static_cast<std::size_t>(8) * w * h, 0xab), valid(static_cast<std::size_t>(w) * h, 0x5a);
     const cpu b{};
-    b.for_each_index(h, detail::valid_runs_rows_kernel{zv, runs.data(), r});
-    b.for_each_index((h + 31) / 32, detail::valid_runs_bands_kernel{zv, runs.data(), r, 32});
+    b.for_each_index(h, detail::valid_runs_rows_kernel{zv, runs.data(), r, valid.data()});
+    b.for_each_index((h + 31) / 32, detail::valid_runs_bands_kernel{zv, runs.data(), r, 32, valid.data()});
+    int wrong_valid = 0;
+    for (int i = 0; i < w * h; ++i)
+      wrong_valid += valid[static_cast<std::size_t>(i)] != (z[static_cast<std::size_t>(i)] > 0.f ? 0xff : 0);
+    CHECK(wrong_valid == 0);
     int wrong = 0, full = 0;
     for (int d = 0; d < 4; ++d)
       for (int s = 0; s < 2; ++s)

@@ -122,18 +122,21 @@ struct interior_columns_kernel {
 /// diagonal, right diagonal; s = 0 the left side (-dx, -dy), 1 the right side) holds how many
 /// consecutive valid pixels follow the pixel on that side, at most r (0..r, r <= 255), stopping
 /// at the image border.  The horizontal planes: one work item per row, a running count.
-/// With xs and ys given, it also writes the X and Y of every pixel's back-projected point (the
+/// It also writes the validity plane the bands read, and with xs and ys given, it also writes the X and Y of every pixel's back-projected point (the
 /// projector's operations, so the same floats) into those planes, laid out like `depth` (its
 /// pitch), for the host's row runs of the edge pass.
 struct valid_runs_rows_kernel {
   image_view<const float> depth;
   std::uint8_t* runs;
   int r;
+  std::uint8_t* valid;  // dense w x h: 0xff where depth is valid, 0 elsewhere (for the bands)
   projector proj{};
   float* xs = nullptr;
   float* ys = nullptr;
   EDGEPLANE_HOST_CLONES EDGEPLANE_HD void operator()(std::int64_t row) const {
     const int y = static_cast<int>(row), w = depth.width;
+    std::uint8_t* vr = valid + static_cast<std::int64_t>(y) * w;
+    for (int x = 0; x < w; ++x) vr[x] = static_cast<std::uint8_t>(0u - static_cast<unsigned>(depth(x, y) > 0.f));
     if (xs != nullptr) {
       const std::ptrdiff_t o = static_cast<std::ptrdiff_t>(y) * depth.pitch;
       for (int x = 0; x < w; ++x) {
@@ -160,11 +163,13 @@ struct valid_runs_rows_kernel {
 /// The vertical and diagonal planes: one work item per band of `band` rows.  A row's count is the
 /// previous row's count at (x - dx) plus one where that pixel is valid (the next row's for the
 /// right side), so only each band's first row (last, for the right side) counts its neighbours
-/// one by one.
+/// one by one.  Validity comes from the byte plane valid_runs_rows_kernel writes (byte
+/// operations only: 64 pixels per AVX-512 instruction).  1 <= r <= 127.
 struct valid_runs_bands_kernel {
   image_view<const float> depth;
   std::uint8_t* runs;
   int r, band;
+  const std::uint8_t* valid;  // dense w x h: 0xff where depth is valid, 0 elsewhere
   template <int Dx>
   EDGEPLANE_HD EDGEPLANE_INLINE void plane(std::uint8_t* out, int y0, int y1, int sy) const {
     // sy = -1: the left side (rows above, x - Dx); +1: the right side (rows below, x + Dx)
@@ -177,13 +182,13 @@ struct valid_runs_bands_kernel {
     for (int k = 1; k <= r; ++k) {
       const int v = first + k * sy, s = k * sx;
       if (v < 0 || v >= h) break;  // every walk has ended
-      const float* zr = &depth(0, v);
+      const std::uint8_t* vr = valid + static_cast<std::int64_t>(v) * w;
       const int xa = s < 0 ? (-s < w ? -s : w) : 0, xb = s > 0 ? (w - s > 0 ? w - s : 0) : w;  // x + s inside
       for (int x = 0; x < xa; ++x) o[x] = static_cast<std::uint8_t>(o[x] | 0x80);
       for (int x = xb; x < w; ++x) o[x] = static_cast<std::uint8_t>(o[x] | 0x80);
       for (int x = xa; x < xb; ++x) {
-        const std::uint8_t dead = static_cast<std::uint8_t>((o[x] >> 7) | !(zr[x + s] > 0.f));
-        o[x] = static_cast<std::uint8_t>((dead << 7) | ((o[x] & 0x7f) + (dead ^ 1)));
+        const std::uint8_t dead = static_cast<std::uint8_t>((o[x] | static_cast<std::uint8_t>(~vr[x + s])) & 0x80);
+        o[x] = static_cast<std::uint8_t>(dead | ((o[x] & 0x7f) + ((dead >> 7) ^ 1)));
       }
     }
     for (int x = 0; x < w; ++x) o[x] = static_cast<std::uint8_t>(o[x] & 0x7f);
@@ -191,14 +196,14 @@ struct valid_runs_bands_kernel {
       const int v = y + sy;
       const std::uint8_t* prev = out + static_cast<std::int64_t>(v) * w;
       std::uint8_t* cur = out + static_cast<std::int64_t>(y) * w;
-      const float* zp = &depth(0, v);
+      const std::uint8_t* vp = valid + static_cast<std::int64_t>(v) * w;
       const int xa = sx < 0 ? 1 : 0, xb = sx > 0 ? w - 1 : w;  // x + sx inside the image
+      const std::uint8_t below_r = static_cast<std::uint8_t>(r - 1);
       if (sx < 0) cur[0] = 0;
       if (sx > 0) cur[w - 1] = 0;
-      for (int x = xa; x < xb; ++x) {
-        int c = prev[x + sx] + 1;
-        c = c < r ? c : r;
-        cur[x] = static_cast<std::uint8_t>(c * static_cast<int>(zp[x + sx] > 0.f));
+      for (int x = xa; x < xb; ++x) {  // min(prev + 1, r), 0 where the neighbour is invalid
+        const std::uint8_t p = prev[x + sx];
+        cur[x] = static_cast<std::uint8_t>(((p < below_r ? p : below_r) + 1) & vp[x + sx]);
       }
     }
   }
@@ -679,13 +684,13 @@ void detect_edge(const Backend& b, image_view<const float> depth, const intrinsi
 }
 
 /// Host scratch of detect_edges for a depth view of w x h with row pitch `pitch` (elements): the
-/// valid-neighbour counts (8 w x h bytes) and the back-projected X and Y planes (floats laid out
-/// like the depth view).
+/// valid-neighbour counts (8 w x h bytes), a validity plane (w x h bytes) and the back-projected X
+/// and Y planes (floats laid out like the depth view).
 inline std::size_t edge_scratch_bytes(int w, int h, std::ptrdiff_t pitch) {
   if (w <= 0 || h <= 0) return 0;
   const std::size_t span = static_cast<std::size_t>(h - 1) * static_cast<std::size_t>(pitch) + static_cast<std::size_t>(w);
-  const std::size_t counts = static_cast<std::size_t>(8) * w * h;
-  return (counts + 63) / 64 * 64 + 2 * span * sizeof(float);
+  const std::size_t bytes = static_cast<std::size_t>(9) * w * h;
+  return (bytes + 63) / 64 * 64 + 2 * span * sizeof(float);
 }
 
 /// All enabled edge types over the four directions in one pass: writes every pixel of `edges`
@@ -712,11 +717,12 @@ void detect_edges(const Backend& b, image_view<const float> depth, const intrins
       scratch = own.data();
     }
     std::uint8_t* runs = scratch;
-    float* xs = reinterpret_cast<float*>(scratch + (static_cast<std::size_t>(8) * w * h + 63) / 64 * 64);
+    std::uint8_t* valid = scratch + static_cast<std::size_t>(8) * w * h;
+    float* xs = reinterpret_cast<float*>(scratch + (static_cast<std::size_t>(9) * w * h + 63) / 64 * 64);
     float* ys = xs + (static_cast<std::size_t>(h - 1) * static_cast<std::size_t>(depth.pitch) + static_cast<std::size_t>(w));
     constexpr int band = 32;
-    b.for_each_index(h, detail::valid_runs_rows_kernel{depth, runs, reach, px.proj, xs, ys});
-    b.for_each_index((h + band - 1) / band, detail::valid_runs_bands_kernel{depth, runs, reach, band});
+    b.for_each_index(h, detail::valid_runs_rows_kernel{depth, runs, reach, valid, px.proj, xs, ys});
+    b.for_each_index((h + band - 1) / band, detail::valid_runs_bands_kernel{depth, runs, reach, band, valid});
     px.runs = runs;
     px.xs = xs;
     px.ys = ys;
