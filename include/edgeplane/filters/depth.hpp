@@ -204,10 +204,10 @@ struct smooth_kernel {
       for (int j = 0; j <= 2 * r; ++j)
         for (int l = 0; l < Lanes; ++l) {
           const float z = row[j + l];
-          // 1 or 0 without a branch; m * z is z or +0 exactly (depths are finite and >= 0)
-          const float m = static_cast<float>((z > 0.f) & (fabsf(z - zc[l]) <= tol[l]));
-          sum[l] += m * z;
-          cnt[l] += m;
+          // z or +0 (adding +0 leaves a sum of non-negative depths as it is)
+          const bool take = (z > 0.f) & (fabsf(z - zc[l]) <= tol[l]);
+          sum[l] += take ? z : 0.f;
+          cnt[l] += take ? 1.f : 0.f;
         }
     }
     float* o = &out(x0, y);
