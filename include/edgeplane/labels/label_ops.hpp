@@ -277,11 +277,17 @@ struct same_label_adjacency {
   image_view<const std::uint16_t> labels;
   EDGEPLANE_HD int grid_width() const { return labels.width; }
   EDGEPLANE_HD int grid_height() const { return labels.height; }
-  EDGEPLANE_HD int operator()(int x, int y, std::int32_t* a, std::int32_t* b) const {
+  /// (x, y) joins (x + 1, y) / (x, y + 1)
+  EDGEPLANE_HD EDGEPLANE_INLINE bool joins_right(int x, int y) const {
     const std::int64_t i = static_cast<std::int64_t>(y) * labels.width + x;
-    const std::uint16_t l = labels.data[i];
-    if (l == 0) return 0;
-    return grid4_pairs(x, y, i, labels.width, labels.height, a, b, [&](std::int64_t j, bool) { return labels.data[j] == l; });
+    return x + 1 < labels.width && labels.data[i] != 0 && labels.data[i + 1] == labels.data[i];
+  }
+  EDGEPLANE_HD EDGEPLANE_INLINE bool joins_down(int x, int y) const {
+    const std::int64_t i = static_cast<std::int64_t>(y) * labels.width + x;
+    return y + 1 < labels.height && labels.data[i] != 0 && labels.data[i + labels.width] == labels.data[i];
+  }
+  EDGEPLANE_HD int operator()(int x, int y, std::int32_t* a, std::int32_t* b) const {
+    return grid4_joins(*this, x, y, a, b);
   }
 };
 /// out[i] = the 1-based region id of i's region when kept (flags[root] = 1) and at most

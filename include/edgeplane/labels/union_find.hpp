@@ -85,6 +85,54 @@ inline constexpr bool is_grid_adjacency = requires(const Adjacency& a) {
   a.grid_width();
   a.grid_height();
 };
+/// Grid adjacencies whose pairs are exactly (x, y)-(x + 1, y) where joins_right(x, y) and
+/// (x, y)-(x, y + 1) where joins_down(x, y), each implying that both elements are active: host
+/// backends then link horizontal runs without atomics (uf_init_runs_kernel) and unite only
+/// vertically.
+template <class Adjacency>
+inline constexpr bool has_grid_joins = is_grid_adjacency<Adjacency> && requires(const Adjacency& a) {
+  a.joins_right(0, 0);
+  a.joins_down(0, 0);
+};
+
+/// Host row pass of connected_components for adjacencies with has_grid_joins (one work item per
+/// row; rows are independent): parent[i] = -1 for inactive elements, else the first element of
+/// its run of horizontally joined pixels, which is the run's smallest element and its root so far.
+template <class Active, class Adjacency>
+struct uf_init_runs_kernel {
+  Active active;
+  Adjacency adj;
+  std::int32_t* parent;
+  EDGEPLANE_HD void operator()(std::int64_t row) const {
+    const int y = static_cast<int>(row), w = adj.grid_width();
+    const std::int64_t o = static_cast<std::int64_t>(y) * w;
+    std::int32_t start = -1;
+    bool joined = false;  // the previous pixel joins this one
+    for (int x = 0; x < w; ++x) {
+      const std::int64_t i = o + x;
+      if (!active(i)) {
+        parent[i] = -1;
+        joined = false;
+        continue;
+      }
+      if (!joined) start = static_cast<std::int32_t>(i);
+      parent[i] = start;
+      joined = adj.joins_right(x, y);
+    }
+  }
+};
+/// Then the vertical unions, one work item per row.
+template <class Adjacency>
+struct uf_union_down_kernel {
+  Adjacency adj;
+  std::int32_t* parent;
+  EDGEPLANE_HD void operator()(std::int64_t row) const {
+    const int y = static_cast<int>(row), w = adj.grid_width();
+    const std::int64_t o = static_cast<std::int64_t>(y) * w;
+    for (int x = 0; x < w; ++x)
+      if (adj.joins_down(x, y)) uf_unite(parent, static_cast<std::int32_t>(o + x), static_cast<std::int32_t>(o + x + w));
+  }
+};
 
 /// For work item i, unites the pairs the adjacency policy names (at most 4).
 template <class Adjacency>
@@ -209,18 +257,19 @@ struct all_active {
   EDGEPLANE_HD bool operator()(std::int64_t) const { return true; }
 };
 
-/// The union pairs of pixel (x, y) (flat index i) of a dense w x h image with its right and lower
-/// neighbours j for which joins(j, below) holds (below: j is the lower neighbour; at most 2 pairs);
-/// returns how many.
-template <class Joins>
-EDGEPLANE_HD EDGEPLANE_INLINE int grid4_pairs(int x, int y, std::int64_t i, int w, int h, std::int32_t* a,
-                                              std::int32_t* b, Joins joins) {
+/// The union pairs of pixel (x, y) of a grid adjacency's dense w x h elements: with its right
+/// neighbour where adj.joins_right(x, y), with its lower one where adj.joins_down(x, y) (each
+/// false outside the grid); returns how many (at most 2).
+template <class Adjacency>
+EDGEPLANE_HD EDGEPLANE_INLINE int grid4_joins(const Adjacency& adj, int x, int y, std::int32_t* a, std::int32_t* b) {
+  const int w = adj.grid_width();
+  const std::int64_t i = static_cast<std::int64_t>(y) * w + x;
   int n = 0;
-  if (x + 1 < w && joins(i + 1, false)) {
+  if (adj.joins_right(x, y)) {
     a[n] = static_cast<std::int32_t>(i);
     b[n++] = static_cast<std::int32_t>(i + 1);
   }
-  if (y + 1 < h && joins(i + w, true)) {
+  if (adj.joins_down(x, y)) {
     a[n] = static_cast<std::int32_t>(i);
     b[n++] = static_cast<std::int32_t>(i + w);
   }
@@ -244,15 +293,17 @@ struct grid4_adjacency {
   }
   EDGEPLANE_HD int grid_width() const { return depth.width; }
   EDGEPLANE_HD int grid_height() const { return depth.height; }
-  EDGEPLANE_HD int operator()(int x, int y, std::int32_t* a, std::int32_t* b) const {
+  /// (x, y) joins (x + 1, y) / (x, y + 1)
+  EDGEPLANE_HD EDGEPLANE_INLINE bool joins_right(int x, int y) const {
     const std::int64_t i = static_cast<std::int64_t>(y) * depth.width + x;  // dense elements
-    if (!active(i)) return 0;
-    const float* zp = &depth(x, y);
-    const float z = *zp;
-    // the neighbour j is i + 1 (right) or i + width (below): its depth is 1 or a pitch further
-    return grid4_pairs(x, y, i, depth.width, depth.height, a, b, [&](std::int64_t j, bool below) {
-      return active(j) && compatible(z, zp[below ? depth.pitch : 1]);
-    });
+    return x + 1 < depth.width && active(i) && active(i + 1) && compatible(depth(x, y), depth(x + 1, y));
+  }
+  EDGEPLANE_HD EDGEPLANE_INLINE bool joins_down(int x, int y) const {
+    const std::int64_t i = static_cast<std::int64_t>(y) * depth.width + x;
+    return y + 1 < depth.height && active(i) && active(i + depth.width) && compatible(depth(x, y), depth(x, y + 1));
+  }
+  EDGEPLANE_HD int operator()(int x, int y, std::int32_t* a, std::int32_t* b) const {
+    return grid4_joins(*this, x, y, a, b);
   }
 };
 
@@ -292,6 +343,14 @@ template <class Backend, class Active, class Adjacency>
 void connected_components(const Backend& b, std::int64_t n, Active active, std::int64_t work_items, Adjacency adj,
                           std::int32_t* parent) {
   detail::require(n >= 0 && n < (std::int64_t(1) << 31), "union-find supports up to 2^31 - 1 elements");
+  if constexpr (Backend::host_accessible && detail::has_grid_joins<Adjacency>) {
+    detail::require(work_items == n && static_cast<std::int64_t>(adj.grid_width()) * adj.grid_height() == n,
+                    "connected_components: a grid adjacency needs one work item per pixel of its image");
+    b.for_each_index(adj.grid_height(), detail::uf_init_runs_kernel<Active, Adjacency>{active, adj, parent});
+    b.for_each_index(adj.grid_height(), detail::uf_union_down_kernel<Adjacency>{adj, parent});
+    b.for_each_index(n, detail::uf_flatten_kernel{parent});
+    return;
+  }
   b.for_each_index(n, detail::uf_init_kernel<Active>{active, parent});
   if constexpr (detail::is_grid_adjacency<Adjacency>) {
     detail::require(work_items == n && static_cast<std::int64_t>(adj.grid_width()) * adj.grid_height() == n,
