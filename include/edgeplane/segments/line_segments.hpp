@@ -59,7 +59,8 @@ struct line_test {
   }
 };
 
-/// Walks diagonal i; marks covered(x, y) = 1 on every pixel of every kept run.  A run that fails
+/// Walks diagonal i; marks covered(x, y) = 1 on every pixel of every kept run (`covered` starts
+/// all 0: extract_segments clears it).  A run that fails
 /// the line test is split at its worst point (that point dropped) and both parts are tested again
 /// (at most `max_splits` times per run), so one undetected crease does not lose a whole run.
 template <class Direction>
@@ -112,7 +113,6 @@ struct diagonal_runs_kernel {
     int rx = 0, ry = 0, len = 0;
     while (depth.contains(x, y)) {
       const std::uint8_t m = mask(x, y);
-      covered(x, y) = 0;
       if (m == 0) {
         if (len == 0) {
           rx = x;
@@ -144,6 +144,12 @@ void extract_segments(const Backend& b, image_view<const float> depth, image_vie
   detail::diagonal_runs_kernel<Direction> f{depth,    mask, covered, detail::make_projector(k), p.t_length,
                                             p.max_run_splits,
                                             detail::line_test{p.t_line, p.noise_k, detail::make_noise(p.noise)}};
+  // cleared first, contiguously (the walks then write only the kept runs' pixels)
+  if (covered.pitch == covered.width)
+    b.memset(covered.data, 0, static_cast<std::size_t>(covered.width) * covered.height);
+  else
+    for (int y = 0; y < covered.height; ++y)
+      b.memset(covered.data + static_cast<std::ptrdiff_t>(y) * covered.pitch, 0, static_cast<std::size_t>(covered.width));
   b.for_each_index(detail::diagonal_count(depth.width, depth.height), f);
 }
 
