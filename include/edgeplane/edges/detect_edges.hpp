@@ -314,11 +314,12 @@ struct all_edges_rows_kernel {
     return {c.x[i], c.y[i], c.z[i]};
   }
 
-  // ORs into maybe[l] the bit 4 D + j of every test j along Direction that lane l's neighbour
-  // counts (cl, cr: nl and nr) and first condition do not reject.  A lane reads neighbours beyond
-  // its counts (invalid depth, or pixels of other rows past the border: garbage, never used,
-  // since every condition on them is masked by the counts the scalar test checks first).
-  // Checked = false: every lane is valid with all its counts at reach (no masks needed).
+  // ORs into maybe[l] the bit 4 D + j of every test j along Direction whose first condition does
+  // not reject lane l.  The jump test takes its side counts (cl, cr: nl and nr) into account
+  // (Checked = false: every count is at reach, so no masks are needed); the extrema, corner and
+  // curved bits are the caller's to clear where the counts reject the test (the scalar test's
+  // first check).  A lane reads neighbours beyond its counts (invalid depth, or pixels of other
+  // rows past the border: garbage, whose bits are cleared).
   template <class Direction, int D, bool Checked>
   EDGEPLANE_HD EDGEPLANE_INLINE void maybe_along(const lane_points& c, std::ptrdiff_t pitch,
                                                  const float* zc, const float* noise_co, const float* noise_cu,
@@ -345,11 +346,10 @@ struct all_edges_rows_kernel {
     }
     if (s.use_extrema) {
       const float t = s.extrema.t;
-      const int n = s.extrema.n;
       for (int l = 0; l < Lanes; ++l) {
         const float z = zc[l], a = c[l - step], b = c[l + step];
         const bool nearer = (z < t * a) & (z < t * b), farther = (z * t > a) & (z * t > b);
-        maybe[l] |= static_cast<unsigned>((!Checked || ((cl[l] >= n) & (cr[l] >= n))) & (nearer | farther)) << (4 * D + 1);
+        maybe[l] |= static_cast<unsigned>(nearer | farther) << (4 * D + 1);
       }
     }
     if (s.use_corner) {
@@ -359,7 +359,7 @@ struct all_edges_rows_kernel {
         const bool bend = !surely_not_farther(at(c, step, l, 0),
                                               at(c, step, l, -h),
                                               at(c, step, l, h), t, noise_co[l]);
-        maybe[l] |= static_cast<unsigned>((!Checked || ((cl[l] >= n) & (cr[l] >= n))) & bend) << (4 * D + 2);
+        maybe[l] |= static_cast<unsigned>(bend) << (4 * D + 2);
       }
     }
     if (s.use_curved) {
@@ -371,7 +371,7 @@ struct all_edges_rows_kernel {
         const point3 mr = at(c, step, l, mid), er = at(c, step, l, n);
         const bool no_l = surely_not_farther(ml, p, el, t, noise_cu[l]);
         const bool no_r = surely_not_farther(mr, p, er, t, noise_cu[l]);
-        maybe[l] |= static_cast<unsigned>((!Checked || ((cl[l] >= n) & (cr[l] >= n))) & !(no_l & no_r)) << (4 * D + 3);
+        maybe[l] |= static_cast<unsigned>(!(no_l & no_r)) << (4 * D + 3);
       }
     }
   }
@@ -570,10 +570,24 @@ struct all_edges_rows_kernel {
         for (int l = 0; l < Lanes; l += 8) diff |= swar::load(cnt + q * n + l) ^ rr;
       full = diff == 0;
     }
-    if (full)
+    if (full) {
       maybe_all<false>(c, pitch, zc, noise_co, noise_cu, cnt, n, maybe);
-    else
+    } else {
       maybe_all<true>(c, pitch, zc, noise_co, noise_cu, cnt, n, maybe);
+      // The extrema, corner and curved pre-tests ran on every lane; each stays open only where
+      // both of its counts reach its neighbours (the scalar test's first check).
+      const int ne = px.set.extrema.n, nco = px.set.corner.n, ncu = px.set.curved.n;
+      for (int d = 0; d < 4; ++d) {
+        const std::uint8_t* cl = cnt + 2 * d * n;
+        const std::uint8_t* cr = cnt + (2 * d + 1) * n;
+        for (int l = 0; l < Lanes; ++l) {
+          const int m = cl[l] < cr[l] ? cl[l] : cr[l];
+          const unsigned keep = 1u | static_cast<unsigned>(m >= ne) << 1 | static_cast<unsigned>(m >= nco) << 2 |
+                                static_cast<unsigned>(m >= ncu) << 3;
+          maybe[l] &= ~(15u << (4 * d)) | (keep << (4 * d));
+        }
+      }
+    }
     std::uint8_t* e = &px.edges(x0, y);
     unsigned any = 0;
     for (int l = 0; l < Lanes; ++l) any |= maybe[l];
