@@ -122,9 +122,9 @@ struct interior_columns_kernel {
 /// diagonal, right diagonal; s = 0 the left side (-dx, -dy), 1 the right side) holds how many
 /// consecutive valid pixels follow the pixel on that side, at most r (0..r, r <= 255), stopping
 /// at the image border.  The horizontal planes: one work item per row, a running count.
-/// It also writes the validity plane the bands read, and with xs and ys given, it also writes the X and Y of every pixel's back-projected point (the
-/// projector's operations, so the same floats) into those planes, laid out like `depth` (its
-/// pitch), for the host's row runs of the edge pass.
+/// It also writes the validity plane the bands read (0xff valid, 0 invalid) and, with xs and ys
+/// given, the X and Y of every pixel's back-projected point (the projector's operations, so the
+/// same floats) into those planes, laid out like `depth` (its pitch), for the edge pass's row runs.
 struct valid_runs_rows_kernel {
   image_view<const float> depth;
   std::uint8_t* runs;
