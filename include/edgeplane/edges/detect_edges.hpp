@@ -385,7 +385,6 @@ struct all_edges_rows_kernel {
 
   // arm_within for every lane with ok[l] set: clears ok[l] where an inner point of the arm of m
   // neighbours on side s lies beyond t * chord + noise[l] of the chord from c to the arm's end.
-  template <class Direction>
   EDGEPLANE_HD EDGEPLANE_INLINE void arms_within(const lane_points& c, std::ptrdiff_t step, int s, int m,
                                                  float t, const float* noise, unsigned* ok) const {
     float cx[Lanes], cy[Lanes], cz[Lanes], ex[Lanes], ey[Lanes], ez[Lanes], bound[Lanes];
@@ -461,9 +460,9 @@ struct all_edges_rows_kernel {
         open |= ok[l];
       }
       if (open) {
-        arms_within<Direction>(c, step, -1, n, s.corner.t_arm, noise_co, ok);
+        arms_within(c, step, -1, n, s.corner.t_arm, noise_co, ok);
         for (int l = 0; l < Lanes; ++l) ok_r[l] = ok[l];
-        arms_within<Direction>(c, step, +1, n, s.corner.t_arm, noise_co, ok_r);
+        arms_within(c, step, +1, n, s.corner.t_arm, noise_co, ok_r);
         for (int l = 0; l < Lanes; ++l) bits[l] |= ok_r[l] * edge_type::corner::bit;
       }
     }
@@ -488,7 +487,7 @@ struct all_edges_rows_kernel {
       if (open) {  // straight(nb, side) where either side is arc-like
         for (int side = 0; side < 2; ++side) {
           for (int l = 0; l < Lanes; ++l) straight[side][l] = arc[0][l] | arc[1][l];
-          arms_within<Direction>(c, step, side == 0 ? -1 : 1, n, cu.t_straight, noise_cu, straight[side]);
+          arms_within(c, step, side == 0 ? -1 : 1, n, cu.t_straight, noise_cu, straight[side]);
         }
         for (int l = 0; l < Lanes; ++l) {
           const unsigned fire = (arc[0][l] & straight[1][l] & (straight[0][l] ^ 1u)) |
