@@ -696,14 +696,28 @@ void detect_edge(const Backend& b, image_view<const float> depth, const intrinsi
                          detail::edge_kernel<Direction, EdgeType>{depth, edges, detail::make_projector(k), edge});
 }
 
-/// Host scratch of detect_edges for a depth view of w x h with row pitch `pitch` (elements): the
-/// valid-neighbour counts (8 w x h bytes), a validity plane (w x h bytes) and the back-projected X
-/// and Y planes (floats laid out like the depth view).
+namespace detail {
+/// The layout of detect_edges' host scratch for a depth view of w x h (w, h > 0) with row pitch
+/// `pitch` (elements), as byte offsets: the valid-neighbour counts (8 w x h bytes), the validity
+/// plane (w x h bytes), then, 64-byte aligned, the back-projected X and Y planes (floats laid out
+/// like the depth view).
+struct edge_scratch_layout {
+  std::size_t valid, xs, ys, bytes;
+  edge_scratch_layout(int w, int h, std::ptrdiff_t pitch) {
+    const std::size_t n = static_cast<std::size_t>(w) * static_cast<std::size_t>(h);
+    const std::size_t span = static_cast<std::size_t>(h - 1) * static_cast<std::size_t>(pitch) + static_cast<std::size_t>(w);
+    valid = 8 * n;
+    xs = (9 * n + 63) / 64 * 64;
+    ys = xs + span * sizeof(float);
+    bytes = ys + span * sizeof(float);
+  }
+};
+}  // namespace detail
+
+/// Bytes of detect_edges' host scratch for a depth view of w x h with row pitch `pitch` (elements)
+/// (see detail::edge_scratch_layout).
 inline std::size_t edge_scratch_bytes(int w, int h, std::ptrdiff_t pitch) {
-  if (w <= 0 || h <= 0) return 0;
-  const std::size_t span = static_cast<std::size_t>(h - 1) * static_cast<std::size_t>(pitch) + static_cast<std::size_t>(w);
-  const std::size_t bytes = static_cast<std::size_t>(9) * w * h;
-  return (bytes + 63) / 64 * 64 + 2 * span * sizeof(float);
+  return w > 0 && h > 0 ? detail::edge_scratch_layout(w, h, pitch).bytes : 0;
 }
 
 /// All enabled edge types over the four directions in one pass: writes every pixel of `edges`
@@ -729,10 +743,11 @@ void detect_edges(const Backend& b, image_view<const float> depth, const intrins
       own.resize(edge_scratch_bytes(w, h, depth.pitch));
       scratch = own.data();
     }
+    const detail::edge_scratch_layout at(w, h, depth.pitch);
     std::uint8_t* runs = scratch;
-    std::uint8_t* valid = scratch + static_cast<std::size_t>(8) * w * h;
-    float* xs = reinterpret_cast<float*>(scratch + (static_cast<std::size_t>(9) * w * h + 63) / 64 * 64);
-    float* ys = xs + (static_cast<std::size_t>(h - 1) * static_cast<std::size_t>(depth.pitch) + static_cast<std::size_t>(w));
+    std::uint8_t* valid = scratch + at.valid;
+    float* xs = reinterpret_cast<float*>(scratch + at.xs);
+    float* ys = reinterpret_cast<float*>(scratch + at.ys);
     constexpr int band = 32;
     b.for_each_index(h, detail::valid_runs_rows_kernel{depth, runs, reach, valid, px.proj, xs, ys});
     b.for_each_index((h + band - 1) / band, detail::valid_runs_bands_kernel{depth, runs, reach, band, valid});
