@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "edgeplane/segments/line_segments.hpp"
+#include "support/scenes.hpp"
 #include "support/test_backends.hpp"
 
 using namespace edgeplane;
@@ -197,4 +198,40 @@ TEST_CASE_TEMPLATE("extract_segments: a crease near one end leaves one half too 
     CAPTURE(i);
     CHECK(cov[at(w, i, i)] == (i > c ? 1 : 0));
   }
+}
+
+TEST_CASE_TEMPLATE("line_test: the host lanes' search finds operator()'s worst point on runs of every length", D,
+                   direction::left_diagonal, direction::right_diagonal) {
+  // A tilted plane with depth noise of a few millimetres and sparse spikes, in a pitched view:
+  // runs of every length from 1 to the diagonal's, starting anywhere, pass or fail the same way
+  // and fail at the same point (the 16-lane blocks, the partial last block and the second sweep).
+  const int w = 61, h = 57, pitch = 67;
+  const auto k = camera(w, h);
+  const auto flat = plane_image(k, w, h, normalized({0.2, -0.3, -1.0}), 1.7);
+  std::vector<float> depth(static_cast<std::size_t>(pitch) * h, -1.f);
+  edgeplane::test::noise_source rng{7};
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      float z = flat[at(w, x, y)] + static_cast<float>(0.003 * rng.gaussian());
+      if (rng.uniform() < 0.01) z += 0.05f;
+      depth[static_cast<std::size_t>(y) * pitch + x] = z;
+    }
+  const image_view<const float> view{depth.data(), w, h, pitch};
+  const params p = presets::thesis_full();
+  const detail::line_test test{p.t_line, p.noise_k, detail::make_noise(p.noise)};
+  const auto proj = detail::make_projector(k);
+  int failing = 0, passing = 0;
+  for (int x0 = 0; x0 < w; x0 += 3)
+    for (int y0 = 0; y0 < h; y0 += 4) {
+      for (int len = 1; x0 + (len - 1) * D::dx >= 0 && x0 + (len - 1) * D::dx < w && y0 + len - 1 < h; ++len) {
+        CAPTURE(x0);
+        CAPTURE(y0);
+        CAPTURE(len);
+        const int want = test(view, proj, x0, y0, len, D{});
+        REQUIRE(test.template worst_lanes<D>(view, proj, x0, y0, len) == want);
+        (want < 0 ? passing : failing) += 1;
+      }
+    }
+  CHECK(failing > 500);
+  CHECK(passing > 1000);
 }

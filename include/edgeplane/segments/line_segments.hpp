@@ -57,13 +57,59 @@ struct line_test {
     }
     return worst;
   }
+
+  /// operator()'s answer, computed 16 points at a time with the very same float operations (host
+  /// backends: one SIMD lane per point, the strided depths gathered).  The worst point is the first
+  /// whose excess d - tol equals the largest excess, when that is > 0; so one vector sweep takes
+  /// the largest excess per lane, and only a failing run is swept again, up to its first point with
+  /// that excess.  The last, partial block repeats the last point in its spare lanes, which changes
+  /// neither the largest excess nor the first point that has it.
+  template <class Direction>
+  EDGEPLANE_INLINE int worst_lanes(image_view<const float> depth, projector proj, int x0, int y0, int len) const {
+    constexpr int lanes = 16;
+    const int x1 = x0 + (len - 1) * Direction::dx, y1 = y0 + (len - 1) * Direction::dy;
+    const point3 a = proj(x0, y0, depth(x0, y0)), b = proj(x1, y1, depth(x1, y1));
+    const float chord_tol = t_line * norm(b - a);
+    const std::ptrdiff_t step = depth.pitch * std::ptrdiff_t(Direction::dy) + Direction::dx;
+    const float* const z0 = &depth(x0, y0);
+    const int last = len - 2;  // the inner points are 1..last
+    // the points k..k+15 of a block, each beyond `last` replaced by `last`, and their depths
+    const auto gather = [&](int k, int* kl, float* zl) {
+      for (int j = 0; j < lanes; ++j) kl[j] = k + j < last ? k + j : last;
+      for (int j = 0; j < lanes; ++j) zl[j] = z0[kl[j] * step];
+    };
+    const auto excess = [&](int k, float z) {
+      const float tol = chord_tol + noise_k * sigma(z);
+      return sqrtf(dist2_to_line(proj(x0 + k * Direction::dx, y0 + k * Direction::dy, z), a, b)) - tol;
+    };
+    if (last < 1) return -1;
+    int kl[lanes];
+    float zl[lanes], most[lanes] = {};
+    for (int k = 1; k <= last; k += lanes) {
+      gather(k, kl, zl);
+      for (int j = 0; j < lanes; ++j) {
+        const float e = excess(kl[j], zl[j]);
+        most[j] = e > most[j] ? e : most[j];
+      }
+    }
+    float m = 0.f;
+    for (int j = 0; j < lanes; ++j) m = most[j] > m ? most[j] : m;
+    if (!(m > 0.f)) return -1;
+    for (int k = 1; k <= last; k += lanes) {
+      gather(k, kl, zl);
+      unsigned hit = 0;
+      for (int j = 0; j < lanes; ++j) hit |= (excess(kl[j], zl[j]) == m ? 1u : 0u) << j;
+      if (hit != 0) return k + __builtin_ctz(hit);
+    }
+    return -1;  // not reached: m is some point's excess
+  }
 };
 
 /// Walks diagonal i; marks covered(x, y) = 1 on every pixel of every kept run (`covered` starts
 /// all 0: extract_segments clears it).  A run that fails
 /// the line test is split at its worst point (that point dropped) and both parts are tested again
 /// (at most `max_splits` times per run), so one undetected crease does not lose a whole run.
-template <class Direction>
+template <class Direction, bool HostLanes = false>
 struct diagonal_runs_kernel {
   image_view<const float> depth;
   image_view<const std::uint8_t> mask;  // 1 = edge or invalid
@@ -77,7 +123,8 @@ struct diagonal_runs_kernel {
     for (int k = 0; k < len; ++k) covered(x0 + k * Direction::dx, y0 + k * Direction::dy) = 1;
   }
 
-  EDGEPLANE_HD void process(int x0, int y0, int len) const {
+  /// Tests run (x0, y0, len) and its split parts.
+  EDGEPLANE_HOST_CLONES EDGEPLANE_HD void process(int x0, int y0, int len) const {
     constexpr int stack_size = 16;
     int sx[stack_size], sy[stack_size], sl[stack_size];
     int top = 0, splits = 0;
@@ -89,7 +136,11 @@ struct diagonal_runs_kernel {
       --top;
       const int ax = sx[top], ay = sy[top], al = sl[top];
       if (al <= t_length) continue;
-      const int w = test(depth, proj, ax, ay, al, Direction{});
+      int w;
+      if constexpr (HostLanes)
+        w = test.template worst_lanes<Direction>(depth, proj, ax, ay, al);
+      else
+        w = test(depth, proj, ax, ay, al, Direction{});
       if (w < 0) {
         keep(ax, ay, al);
         continue;
@@ -141,7 +192,7 @@ void extract_segments(const Backend& b, image_view<const float> depth, image_vie
   detail::check_intrinsics(k);
   detail::check_same_size(depth, mask, "depth", "edge mask");
   detail::check_same_size(depth, covered, "depth", "covered");
-  detail::diagonal_runs_kernel<Direction> f{depth,    mask, covered, detail::make_projector(k), p.t_length,
+  detail::diagonal_runs_kernel<Direction, Backend::host_accessible> f{depth,    mask, covered, detail::make_projector(k), p.t_length,
                                             p.max_run_splits,
                                             detail::line_test{p.t_line, p.noise_k, detail::make_noise(p.noise)}};
   // cleared first, contiguously (the walks then write only the kept runs' pixels)
