@@ -64,14 +64,19 @@ struct count_roots_kernel {
 /// Host form of count_roots_kernel: one work item per block of `block` elements, one atomic add
 /// per run of elements with the same root (a component's pixels come in long runs), so the two
 /// threads of a small machine do not take turns on one counter for every pixel.
+/// Each block also lists its roots (elements that are their own parent), in order, at
+/// roots[i0], roots[i0 + 1], ... (i0 = the block's first element), and their number at
+/// nroots[item].
 struct count_roots_blocks_kernel {
   const std::int32_t* parent;
   std::int32_t* count;
   std::int64_t n;
   int block;
+  std::int32_t* roots;
+  std::int32_t* nroots;
   EDGEPLANE_HD void operator()(std::int64_t item) const {
     const std::int64_t i0 = item * block, i1 = i0 + block < n ? i0 + block : n;
-    std::int32_t cur = -1, run = 0;
+    std::int32_t cur = -1, run = 0, listed = 0;
     for (std::int64_t i = i0; i < i1; ++i) {
       const std::int32_t r = parent[i];
       if (r != cur) {
@@ -80,8 +85,10 @@ struct count_roots_blocks_kernel {
         run = 0;
       }
       ++run;
+      if (r == static_cast<std::int32_t>(i)) roots[i0 + listed++] = r;
     }
     if (cur >= 0) atomic_add(count + cur, run);
+    nroots[item] = listed;
   }
 };
 /// Throws edgeplane::error unless a frame's depth view, depth scale and intrinsics can be segmented.
@@ -289,8 +296,31 @@ class segmenter {
   std::int32_t flag_components(std::int64_t n, std::int32_t min_size) {
     b_.memset(count_.data(), 0, sizeof(std::int32_t) * n);
     if constexpr (Backend::host_accessible) {
+      // The blocks count their roots' elements and list their roots (in flags_); then the roots
+      // are numbered in order here, writing flags_ and scan_ at the roots only (the only entries
+      // anyone reads: every reader indexes them by a flattened parent).  A block's list lies in
+      // its own elements, the only ones its roots' entries can overwrite, so it is copied out first.
       constexpr int block = 1024;
-      b_.for_each_index((n + block - 1) / block, detail::count_roots_blocks_kernel{parent_.data(), count_.data(), n, block});
+      const std::int64_t blocks = (n + block - 1) / block;
+      block_roots_.resize(static_cast<std::size_t>(blocks));
+      b_.for_each_index(blocks, detail::count_roots_blocks_kernel{parent_.data(), count_.data(), n, block,
+                                                                  flags_.data(), block_roots_.data()});
+      std::int32_t* flags = flags_.data();
+      std::int32_t* scan = scan_.data();
+      const std::int32_t* count = count_.data();
+      std::int32_t k = 0, list[block];
+      for (std::int64_t blk = 0; blk < blocks; ++blk) {
+        const std::int32_t m = block_roots_[static_cast<std::size_t>(blk)];
+        std::copy(flags + blk * block, flags + blk * block + m, list);
+        for (std::int32_t j = 0; j < m; ++j) {
+          const std::int32_t r = list[j];
+          const std::int32_t keep = count[r] >= min_size ? 1 : 0;
+          k += keep;
+          flags[r] = keep;
+          scan[r] = k;  // the inclusive scan of the flags, at r
+        }
+      }
+      return k;
     } else {
       b_.for_each_index(n, detail::count_roots_kernel{parent_.data(), count_.data()});
     }
@@ -656,6 +686,7 @@ class segmenter {
   std::vector<char> keep_, status_;
   std::vector<int> group_, merge_parent_;
   std::vector<std::uint8_t> host_failed_;
+  std::vector<std::int32_t> block_roots_;  // roots listed per block (host backends' numbering)
   std::vector<std::uint16_t> host_table_, region_origin_;
   std::vector<float> host_planes_, host_tol_;
 };

@@ -370,15 +370,30 @@ TEST_CASE("count_roots_blocks_kernel counts as count_roots_kernel does") {
     if (g.uniform01() < 0.05) root = static_cast<std::int32_t>(g.next_u32(static_cast<std::uint32_t>(n)));
     parent[static_cast<std::size_t>(i)] = g.uniform01() < 0.1 ? -1 : root;
   }
+  for (std::int64_t i = 0; i < n; ++i)  // a flattened forest: every root its own parent
+    if (parent[static_cast<std::size_t>(i)] >= 0) parent[static_cast<std::size_t>(parent[static_cast<std::size_t>(i)])] = parent[static_cast<std::size_t>(i)];
   std::vector<std::int32_t> a(static_cast<std::size_t>(n), 0), b(a);
   const cpu c{};
   c.for_each_index(n, detail::count_roots_kernel{parent.data(), a.data()});
   for (const int block : {1, 7, 1024})
     for (const cpu::mode m : {cpu::mode::serial, cpu::mode::parallel}) {
+      CAPTURE(block);
       std::fill(b.begin(), b.end(), 0);
       const cpu cb{m};
-      cb.for_each_index((n + block - 1) / block, detail::count_roots_blocks_kernel{parent.data(), b.data(), n, block});
+      const std::int64_t blocks = (n + block - 1) / block;
+      std::vector<std::int32_t> roots(static_cast<std::size_t>(n), -7), nroots(static_cast<std::size_t>(blocks), -7);
+      cb.for_each_index(blocks, detail::count_roots_blocks_kernel{parent.data(), b.data(), n, block, roots.data(),
+                                                                  nroots.data()});
       CHECK(a == b);
+      // each block lists exactly its roots, in order, from its first element on
+      for (std::int64_t k = 0; k < blocks; ++k) {
+        std::vector<std::int32_t> want;
+        for (std::int64_t i = k * block; i < std::min<std::int64_t>(n, (k + 1) * block); ++i)
+          if (parent[static_cast<std::size_t>(i)] == i) want.push_back(static_cast<std::int32_t>(i));
+        const auto first = roots.begin() + k * block;
+        REQUIRE(nroots[static_cast<std::size_t>(k)] == static_cast<std::int32_t>(want.size()));
+        CHECK(std::equal(want.begin(), want.end(), first));
+      }
     }
   CHECK(std::count_if(a.begin(), a.end(), [](std::int32_t k) { return k > 0; }) > 50);
 }
