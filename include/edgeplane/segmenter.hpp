@@ -66,9 +66,10 @@ struct count_roots_kernel {
 /// threads of a small machine do not take turns on one counter for every pixel.
 /// Each block also lists its roots (elements that are their own parent), in order, at
 /// roots[i0], roots[i0 + 1], ... (i0 = the block's first element), and their number at
-/// nroots[item].
+/// nroots[item].  The union-find need not be flattened: the kernel flattens its block (parent[i]
+/// = i's root), as uf_flatten_kernel does.
 struct count_roots_blocks_kernel {
-  const std::int32_t* parent;
+  std::int32_t* parent;
   std::int32_t* count;
   std::int64_t n;
   int block;
@@ -78,7 +79,11 @@ struct count_roots_blocks_kernel {
     const std::int64_t i0 = item * block, i1 = i0 + block < n ? i0 + block : n;
     std::int32_t cur = -1, run = 0, listed = 0;
     for (std::int64_t i = i0; i < i1; ++i) {
-      const std::int32_t r = parent[i];
+      std::int32_t r = atomic_load(parent + i);
+      if (r >= 0 && r != cur) {  // (an element of the current root's run is flat already)
+        r = uf_root(parent, static_cast<std::int32_t>(i));
+        atomic_store(parent + i, r);
+      }
       if (r != cur) {
         if (cur >= 0) atomic_add(count + cur, run);
         cur = r;
@@ -291,6 +296,16 @@ class segmenter {
     b_.for_each_index(n, detail::write_candidates_kernel{parent_.data(), flags_.data(), scan_.data(), cand_.data()});
     return k;
   }
+  // connected_components into parent_, except that host backends leave the flattening to
+  // flag_components' counting pass, which must follow.
+  template <class Active, class Adjacency>
+  void components(std::int64_t n, Active active, std::int64_t work_items, Adjacency adj, std::int32_t* parent) {
+    if constexpr (Backend::host_accessible)
+      detail::unite_components(b_, n, active, work_items, adj, parent);
+    else
+      connected_components(b_, n, active, work_items, adj, parent);
+  }
+
   // Flags (flags_) the roots of union-find components of at least min_size elements and numbers
   // them 1, 2, ... in raster order of their roots (scan_); returns how many.
   std::int32_t flag_components(std::int64_t n, std::int32_t min_size) {
@@ -431,7 +446,7 @@ class segmenter {
     const auto cand = view(cand_.data(), pw_, ph_);
     const float slope_inv_f = p_.adjacency_slope / std::min(std::abs(kp.fx), std::abs(kp.fy));
     const detail::covered_active covered{cov_l_.data(), cov_r_.data()};
-    connected_components(b_, n, covered, n,
+    components(n, covered, n,
                          detail::grid4_adjacency<detail::covered_active>{z, covered, p_.t_je, p_.t_je_quad, slope_inv_f},
                          parent_.data());
     std::int32_t num_cand = number_components(n);
@@ -473,7 +488,7 @@ class segmenter {
       erode_failed(b_, image_view<const std::int32_t>(cand_r), failed_.data(), round * p_.split_erode,
                    view(cov_l_.data(), cand_r.width, cand_r.height));
       const detail::mask_bit_active eroded{cov_l_.data(), 2};
-      connected_components(b_, n_r, eroded, n_r,
+      components(n_r, eroded, n_r,
                            detail::grid4_adjacency<detail::mask_bit_active>{z_r, eroded, p_.t_je, p_.t_je_quad,
                                                                             slope_inv_f},
                            parent_.data());
@@ -606,7 +621,7 @@ class segmenter {
     region_origin_.clear();
     if (p_.split_regions && num_planes > 0) {
       const std::uint16_t* lbl = la.data;
-      connected_components(b_, n, detail::nonzero_label_active{lbl}, n,
+      components(n, detail::nonzero_label_active{lbl}, n,
                            detail::same_label_adjacency{image_view<const std::uint16_t>(la)}, parent_.data());
       const std::int32_t min_px = p_.min_region_pixels > 0 ? p_.min_region_pixels : p_.t_size;
       const std::int32_t regions = std::min<std::int32_t>(flag_components(n, min_px), 65535);

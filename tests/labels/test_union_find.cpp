@@ -361,7 +361,7 @@ TEST_CASE_TEMPLATE("erode_failed: the separable erosion marks exactly the pixels
 
 // The segmenter counts each component's elements; host backends count by runs of equal roots in
 // blocks (detail::count_roots_blocks_kernel) instead of one atomic add per element.
-TEST_CASE("count_roots_blocks_kernel counts as count_roots_kernel does") {
+TEST_CASE("count_roots_blocks_kernel flattens, counts as count_roots_kernel does and lists the roots") {
   lcg_noise g(23);
   const std::int64_t n = 5000;
   std::vector<std::int32_t> parent(static_cast<std::size_t>(n));
@@ -372,9 +372,20 @@ TEST_CASE("count_roots_blocks_kernel counts as count_roots_kernel does") {
   }
   for (std::int64_t i = 0; i < n; ++i)  // a flattened forest: every root its own parent
     if (parent[static_cast<std::size_t>(i)] >= 0) parent[static_cast<std::size_t>(parent[static_cast<std::size_t>(i)])] = parent[static_cast<std::size_t>(i)];
+  const std::vector<std::int32_t> flat = parent;
+  // ... whose members half the time point to the previous member of their component instead
+  // (chains of any length to the root), which the kernel must flatten
+  std::vector<std::int32_t> last(static_cast<std::size_t>(n), -1);
+  for (std::int64_t i = 0; i < n; ++i) {
+    const std::int32_t r = flat[static_cast<std::size_t>(i)];
+    if (r < 0 || r == i) continue;
+    if (last[static_cast<std::size_t>(r)] >= 0 && g.uniform01() < 0.5) parent[static_cast<std::size_t>(i)] = last[static_cast<std::size_t>(r)];
+    last[static_cast<std::size_t>(r)] = static_cast<std::int32_t>(i);
+  }
+  REQUIRE(parent != flat);
   std::vector<std::int32_t> a(static_cast<std::size_t>(n), 0), b(a);
   const cpu c{};
-  c.for_each_index(n, detail::count_roots_kernel{parent.data(), a.data()});
+  c.for_each_index(n, detail::count_roots_kernel{flat.data(), a.data()});
   for (const int block : {1, 7, 1024})
     for (const cpu::mode m : {cpu::mode::serial, cpu::mode::parallel}) {
       CAPTURE(block);
@@ -382,14 +393,16 @@ TEST_CASE("count_roots_blocks_kernel counts as count_roots_kernel does") {
       const cpu cb{m};
       const std::int64_t blocks = (n + block - 1) / block;
       std::vector<std::int32_t> roots(static_cast<std::size_t>(n), -7), nroots(static_cast<std::size_t>(blocks), -7);
-      cb.for_each_index(blocks, detail::count_roots_blocks_kernel{parent.data(), b.data(), n, block, roots.data(),
+      std::vector<std::int32_t> forest = parent;
+      cb.for_each_index(blocks, detail::count_roots_blocks_kernel{forest.data(), b.data(), n, block, roots.data(),
                                                                   nroots.data()});
       CHECK(a == b);
+      CHECK(forest == flat);
       // each block lists exactly its roots, in order, from its first element on
       for (std::int64_t k = 0; k < blocks; ++k) {
         std::vector<std::int32_t> want;
         for (std::int64_t i = k * block; i < std::min<std::int64_t>(n, (k + 1) * block); ++i)
-          if (parent[static_cast<std::size_t>(i)] == i) want.push_back(static_cast<std::int32_t>(i));
+          if (flat[static_cast<std::size_t>(i)] == i) want.push_back(static_cast<std::int32_t>(i));
         const auto first = roots.begin() + k * block;
         REQUIRE(nroots[static_cast<std::size_t>(k)] == static_cast<std::int32_t>(want.size()));
         CHECK(std::equal(want.begin(), want.end(), first));

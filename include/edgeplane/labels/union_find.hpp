@@ -334,6 +334,32 @@ void erode_failed(const Backend& b, image_view<const std::int32_t> cand, const s
                    detail::eroded_column_blocks_kernel<block>{cand, failed, mask, r, block});
 }
 
+namespace detail {
+/// connected_components without its last pass: `parent` ends as a forest whose roots are each
+/// component's smallest element, not yet flattened (uf_root(parent, i) is i's root).  For callers
+/// that flatten within their next pass.
+template <class Backend, class Active, class Adjacency>
+void unite_components(const Backend& b, std::int64_t n, Active active, std::int64_t work_items, Adjacency adj,
+                      std::int32_t* parent) {
+  require(n >= 0 && n < (std::int64_t(1) << 31), "union-find supports up to 2^31 - 1 elements");
+  if constexpr (Backend::host_accessible && has_grid_joins<Adjacency>) {
+    require(work_items == n && static_cast<std::int64_t>(adj.grid_width()) * adj.grid_height() == n,
+            "connected_components: a grid adjacency needs one work item per pixel of its image");
+    b.for_each_index(adj.grid_height(), uf_init_runs_kernel<Active, Adjacency>{active, adj, parent});
+    b.for_each_index(adj.grid_height(), uf_union_down_kernel<Adjacency>{adj, parent});
+    return;
+  }
+  b.for_each_index(n, uf_init_kernel<Active>{active, parent});
+  if constexpr (is_grid_adjacency<Adjacency>) {
+    require(work_items == n && static_cast<std::int64_t>(adj.grid_width()) * adj.grid_height() == n,
+            "connected_components: a grid adjacency needs one work item per pixel of its image");
+    for_each_pixel(b, adj.grid_width(), adj.grid_height(), uf_union_grid_kernel<Adjacency>{adj, parent});
+  } else {
+    b.for_each_index(work_items, uf_union_kernel<Adjacency>{adj, parent});
+  }
+}
+}  // namespace detail
+
 /// Connected components with the lock-free union-find: `parent` (n elements, backend memory) ends
 /// with each active element's root, the smallest element of its component, and -1 for inactive
 /// ones.  `work_items` is the number of adjacency work items.  Synchronous semantics between the
@@ -342,23 +368,7 @@ void erode_failed(const Backend& b, image_view<const std::int32_t> cand, const s
 template <class Backend, class Active, class Adjacency>
 void connected_components(const Backend& b, std::int64_t n, Active active, std::int64_t work_items, Adjacency adj,
                           std::int32_t* parent) {
-  detail::require(n >= 0 && n < (std::int64_t(1) << 31), "union-find supports up to 2^31 - 1 elements");
-  if constexpr (Backend::host_accessible && detail::has_grid_joins<Adjacency>) {
-    detail::require(work_items == n && static_cast<std::int64_t>(adj.grid_width()) * adj.grid_height() == n,
-                    "connected_components: a grid adjacency needs one work item per pixel of its image");
-    b.for_each_index(adj.grid_height(), detail::uf_init_runs_kernel<Active, Adjacency>{active, adj, parent});
-    b.for_each_index(adj.grid_height(), detail::uf_union_down_kernel<Adjacency>{adj, parent});
-    b.for_each_index(n, detail::uf_flatten_kernel{parent});
-    return;
-  }
-  b.for_each_index(n, detail::uf_init_kernel<Active>{active, parent});
-  if constexpr (detail::is_grid_adjacency<Adjacency>) {
-    detail::require(work_items == n && static_cast<std::int64_t>(adj.grid_width()) * adj.grid_height() == n,
-                    "connected_components: a grid adjacency needs one work item per pixel of its image");
-    detail::for_each_pixel(b, adj.grid_width(), adj.grid_height(), detail::uf_union_grid_kernel<Adjacency>{adj, parent});
-  } else {
-    b.for_each_index(work_items, detail::uf_union_kernel<Adjacency>{adj, parent});
-  }
+  detail::unite_components(b, n, active, work_items, adj, parent);
   b.for_each_index(n, detail::uf_flatten_kernel{parent});
 }
 
