@@ -208,13 +208,14 @@ TEST_CASE_TEMPLATE("smooth_depth: reduces noise on a plane and keeps a depth ste
 }
 
 // The host backends smooth runs of 16 pixels at once (detail::smooth_kernel::lanes, through
-// detail::window_runs); the device backend runs detail::smooth_kernel per pixel.  Both must give the same floats, bit for bit, at
+// detail::window_runs, and border_lanes on a zero-padded copy where the windows leave the image);
+// the device backend runs detail::smooth_kernel per pixel.  Both must give the same floats, bit for bit, at
 // borders, around invalid pixels and for widths that are not multiples of 16.
 TEST_CASE("smooth_depth: the 16-pixel row kernel equals the per-pixel kernel bit for bit") {
   lcg_noise noise(11);
   for (const int w : {1, 5, 16, 17, 40, 67})
     for (const int h : {1, 3, 9})
-      for (const int r : {1, 2, 3}) {
+      for (const int r : {1, 2, 3, 8, 9}) {  // 8: the largest border tile; 9: border runs per pixel
         CAPTURE(w);
         CAPTURE(h);
         CAPTURE(r);

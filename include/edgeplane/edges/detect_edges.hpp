@@ -624,17 +624,20 @@ struct mask_dilate_kernel {
         }
     out(x, y) = v;
   }
-  template <int Lanes>  // see window_runs; 8 bytes per word (swar)
-  EDGEPLANE_HD EDGEPLANE_INLINE void lanes(int x0, int y) const {
+  /// Host runs of Lanes pixels (see window_runs), c[0..Lanes-1] into o[0..Lanes-1] (rows pitch
+  /// bytes apart, their windows readable), 8 bytes per word (swar).  A zero tap (outside the
+  /// image, in window_runs' border copies) sets no bit, as operator() skips it.
+  static constexpr bool zero_padded = true;
+  template <int Lanes>
+  EDGEPLANE_HD EDGEPLANE_INLINE void lanes_from(const std::uint8_t* c, std::ptrdiff_t pitch, std::uint8_t* o) const {
     static_assert(Lanes % 8 == 0, "runs of whole 8-byte words");
     constexpr int words = Lanes / 8;
     std::uint64_t v[words] = {};
     for (int dy = -r; dy <= r; ++dy) {
-      const std::uint8_t* row = &in(x0 - r, y + dy);
+      const std::uint8_t* row = c + dy * pitch - r;
       for (int j = 0; j <= 2 * r; ++j)
         for (int k = 0; k < words; ++k) v[k] |= swar::load(row + j + 8 * k);
     }
-    std::uint8_t* o = &out(x0, y);
     for (int k = 0; k < words; ++k) swar::store(o + 8 * k, swar::nonzero_bytes(v[k]));
   }
 };

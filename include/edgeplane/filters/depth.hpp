@@ -186,13 +186,15 @@ struct smooth_kernel {
         }
     out(x, y) = s / static_cast<float>(n);
   }
-  /// Host runs of Lanes pixels (see window_runs): the lanes advance together through the window,
-  /// each lane's sum in the same order as above (bit-identical), which breaks the
-  /// one-add-after-another chain of a single pixel and lets the compiler use SIMD.
+  /// Host runs of Lanes pixels (see window_runs), c[0..Lanes-1] into o[0..Lanes-1] (rows pitch
+  /// elements apart, their windows readable): the lanes advance together through the window, each
+  /// lane's sum in the same order as above (bit-identical), which breaks the one-add-after-another
+  /// chain of a single pixel and lets the compiler use SIMD.  A zero tap (outside the image, in
+  /// window_runs' border copies) adds +0 and no count, as operator() skips it.
+  static constexpr bool zero_padded = true;
   template <int Lanes>
-  EDGEPLANE_HD EDGEPLANE_INLINE void lanes(int x0, int y) const {
+  EDGEPLANE_HD EDGEPLANE_INLINE void lanes_from(const float* c, std::ptrdiff_t pitch, float* o) const {
     float zc[Lanes], tol[Lanes], sum[Lanes], cnt[Lanes];  // counts as floats: exact, and one vector type
-    const float* c = &in(x0, y);
     for (int l = 0; l < Lanes; ++l) {
       zc[l] = c[l];
       tol[l] = k * (s0 + s2 * zc[l] * zc[l]);
@@ -200,7 +202,7 @@ struct smooth_kernel {
       cnt[l] = 0.f;
     }
     for (int dy = -r; dy <= r; ++dy) {
-      const float* row = &in(x0 - r, y + dy);
+      const float* row = c + dy * pitch - r;
       for (int j = 0; j <= 2 * r; ++j)
         for (int l = 0; l < Lanes; ++l) {
           const float z = row[j + l];
@@ -210,7 +212,6 @@ struct smooth_kernel {
           cnt[l] += take ? 1.f : 0.f;
         }
     }
-    float* o = &out(x0, y);
     for (int l = 0; l < Lanes; ++l) o[l] = (zc[l] > 0.f && cnt[l] > 0.f) ? sum[l] / cnt[l] : 0.f;
   }
 };
