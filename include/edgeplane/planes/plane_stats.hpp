@@ -76,21 +76,35 @@ struct inlier_labels {
     return plane_distance(planes, g, p) <= tol[g] ? g : 0;
   }
   /// out[l] = (*this)(x + l, y) for l < L (host lanes of moments_kernel): where all L pixels
-  /// belong to one candidate (most runs), its plane is looked up once.
+  /// belong to one candidate (most runs), its plane is looked up once; elsewhere each lane looks
+  /// up its own, without branches (a lane without a candidate reads entry 0 of the tables, which
+  /// always exists, and is masked).
   template <int L>
   EDGEPLANE_HD EDGEPLANE_INLINE void lanes(int x, int y, std::int32_t* out) const {
     const std::int32_t* cr = &cand(x, y);
     const std::int32_t c0 = cr[0];
     bool one = true;
     for (int l = 0; l < L; ++l) one &= cr[l] == c0;
-    const std::int32_t g = one && c0 > 0 ? table[c0] : 0;
-    if (!one || g == 0) {
-      for (int l = 0; l < L; ++l) out[l] = (*this)(x + l, y);
+    if (one && c0 <= 0) {
+      for (int l = 0; l < L; ++l) out[l] = 0;
+      return;
+    }
+    const std::int32_t g = one ? table[c0] : 0;
+    const float* zr = &depth(x, y);
+    if (g == 0) {
+      for (int l = 0; l < L; ++l) {
+        const std::int32_t c = cr[l];
+        const std::int32_t gl = c > 0 ? static_cast<std::int32_t>(table[c > 0 ? c : 0]) : 0;
+        const float* q = planes + 4 * gl;
+        const float z = zr[l];
+        const point3 p = proj(x + l, y, z);
+        const float d = fabsf(q[0] * p.x + q[1] * p.y + q[2] * p.z + q[3]);  // plane_distance's operations
+        out[l] = ((gl != 0) & (z > 0.f) & (d <= tol[gl])) ? gl : 0;
+      }
       return;
     }
     const float* q = planes + 4 * g;
     const float q0 = q[0], q1 = q[1], q2 = q[2], q3 = q[3], t = tol[g];
-    const float* zr = &depth(x, y);
     for (int l = 0; l < L; ++l) {
       const float z = zr[l];
       const point3 p = proj(x + l, y, z);
