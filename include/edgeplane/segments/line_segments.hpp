@@ -137,9 +137,11 @@ struct diagonal_runs_kernel {
       const int ax = sx[top], ay = sy[top], al = sl[top];
       if (al <= t_length) continue;
       int w;
+#if !defined(__CUDA_ARCH__)
       if constexpr (HostLanes)
         w = test.template worst_lanes<Direction>(depth, proj, ax, ay, al);
       else
+#endif
         w = test(depth, proj, ax, ay, al, Direction{});
       if (w < 0) {
         keep(ax, ay, al);
