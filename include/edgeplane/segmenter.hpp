@@ -338,12 +338,12 @@ class segmenter {
       return k;
     } else {
       b_.for_each_index(n, detail::count_roots_kernel{parent_.data(), count_.data()});
+      b_.for_each_index(n, detail::flag_candidates_kernel{parent_.data(), count_.data(), min_size, flags_.data()});
+      b_.inclusive_scan(flags_.data(), n, scan_.data());
+      std::int32_t k = 0;  // the scan's last element is the number of components kept
+      b_.copy_to_host(&k, scan_.data() + (n - 1), sizeof(std::int32_t));
+      return k;
     }
-    b_.for_each_index(n, detail::flag_candidates_kernel{parent_.data(), count_.data(), min_size, flags_.data()});
-    b_.inclusive_scan(flags_.data(), n, scan_.data());
-    std::int32_t k = 0;  // the scan's last element is the number of components kept
-    b_.copy_to_host(&k, scan_.data() + (n - 1), sizeof(std::int32_t));
-    return k;
   }
 
   // Fits candidates first+1..num from their pixels; those of 1..first keep their fits (a split
@@ -447,8 +447,8 @@ class segmenter {
     const float slope_inv_f = p_.adjacency_slope / std::min(std::abs(kp.fx), std::abs(kp.fy));
     const detail::covered_active covered{cov_l_.data(), cov_r_.data()};
     components(n, covered, n,
-                         detail::grid4_adjacency<detail::covered_active>{z, covered, p_.t_je, p_.t_je_quad, slope_inv_f},
-                         parent_.data());
+               detail::grid4_adjacency<detail::covered_active>{z, covered, p_.t_je, p_.t_je_quad, slope_inv_f},
+               parent_.data());
     std::int32_t num_cand = number_components(n);
     out.candidates = num_cand;
     b_.synchronize();
@@ -489,9 +489,8 @@ class segmenter {
                    view(cov_l_.data(), cand_r.width, cand_r.height));
       const detail::mask_bit_active eroded{cov_l_.data(), 2};
       components(n_r, eroded, n_r,
-                           detail::grid4_adjacency<detail::mask_bit_active>{z_r, eroded, p_.t_je, p_.t_je_quad,
-                                                                            slope_inv_f},
-                           parent_.data());
+                 detail::grid4_adjacency<detail::mask_bit_active>{z_r, eroded, p_.t_je, p_.t_je_quad, slope_inv_f},
+                 parent_.data());
       const std::int32_t added = flag_components(n_r, p_.t_size);
       detail::for_each_pixel(b_, cand_r.width, cand_r.height,
                              detail::write_members_kernel{parent_.data(), flags_.data(), scan_.data(), num_cand, cand_r});
@@ -622,7 +621,7 @@ class segmenter {
     if (p_.split_regions && num_planes > 0) {
       const std::uint16_t* lbl = la.data;
       components(n, detail::nonzero_label_active{lbl}, n,
-                           detail::same_label_adjacency{image_view<const std::uint16_t>(la)}, parent_.data());
+                 detail::same_label_adjacency{image_view<const std::uint16_t>(la)}, parent_.data());
       const std::int32_t min_px = p_.min_region_pixels > 0 ? p_.min_region_pixels : p_.t_size;
       const std::int32_t regions = std::min<std::int32_t>(flag_components(n, min_px), 65535);
       origin_.resize(static_cast<std::size_t>(regions) + 1);

@@ -62,8 +62,8 @@ struct line_test {
   /// backends: one SIMD lane per point, the strided depths gathered).  The worst point is the first
   /// whose excess d - tol equals the largest excess, when that is > 0; so one vector sweep takes
   /// the largest excess per lane, and only a failing run is swept again, up to its first point with
-  /// that excess.  The last, partial block repeats the last point in its spare lanes, which changes
-  /// neither the largest excess nor the first point that has it.
+  /// that excess.  The last, partial block repeats the last inner point in its spare lanes, which
+  /// changes neither the largest excess nor the first point that has it.
   template <class Direction>
   EDGEPLANE_INLINE int worst_lanes(image_view<const float> depth, projector proj, int x0, int y0, int len) const {
     constexpr int lanes = 16;
@@ -109,6 +109,7 @@ struct line_test {
 /// all 0: extract_segments clears it).  A run that fails
 /// the line test is split at its worst point (that point dropped) and both parts are tested again
 /// (at most `max_splits` times per run), so one undetected crease does not lose a whole run.
+/// HostLanes (host backends): the line test by line_test::worst_lanes, which gives the same answers.
 template <class Direction, bool HostLanes = false>
 struct diagonal_runs_kernel {
   image_view<const float> depth;
@@ -194,9 +195,9 @@ void extract_segments(const Backend& b, image_view<const float> depth, image_vie
   detail::check_intrinsics(k);
   detail::check_same_size(depth, mask, "depth", "edge mask");
   detail::check_same_size(depth, covered, "depth", "covered");
-  detail::diagonal_runs_kernel<Direction, Backend::host_accessible> f{depth,    mask, covered, detail::make_projector(k), p.t_length,
-                                            p.max_run_splits,
-                                            detail::line_test{p.t_line, p.noise_k, detail::make_noise(p.noise)}};
+  detail::diagonal_runs_kernel<Direction, Backend::host_accessible> f{
+      depth, mask, covered, detail::make_projector(k), p.t_length, p.max_run_splits,
+      detail::line_test{p.t_line, p.noise_k, detail::make_noise(p.noise)}};
   // cleared first, contiguously (the walks then write only the kept runs' pixels)
   if (covered.pitch == covered.width)
     b.memset(covered.data, 0, static_cast<std::size_t>(covered.width) * covered.height);
