@@ -288,26 +288,23 @@ class segmenter {
                               host_bbox_.data() + static_cast<std::size_t>(c) * 4);
   }
 
-  // Numbers the union-find components of at least t_size elements 1, 2, ... in raster order of
-  // their roots and writes the ids into cand_ (0 for pixels of no kept component).  Returns how
-  // many.
-  std::int32_t number_components(std::int64_t n) {
-    const std::int32_t k = flag_components(n, p_.t_size);
-    b_.for_each_index(n, detail::write_candidates_kernel{parent_.data(), flags_.data(), scan_.data(), cand_.data()});
-    return k;
-  }
-  // connected_components into parent_, except that host backends leave the flattening to
-  // flag_components' counting pass, which must follow.
+  // The connected components (into parent_) of the n elements, their roots flagged (flags_) where
+  // they have at least min_size elements and numbered 1, 2, ... in raster order of the roots
+  // (scan_); returns how many.  Host backends leave the union-find's flattening to the counting
+  // pass of flag_components.
   template <class Active, class Adjacency>
-  void components(std::int64_t n, Active active, std::int64_t work_items, Adjacency adj, std::int32_t* parent) {
+  std::int32_t components(std::int64_t n, Active active, std::int64_t work_items, Adjacency adj,
+                          std::int32_t min_size) {
     if constexpr (Backend::host_accessible)
-      detail::unite_components(b_, n, active, work_items, adj, parent);
+      detail::unite_components(b_, n, active, work_items, adj, parent_.data());
     else
-      connected_components(b_, n, active, work_items, adj, parent);
+      connected_components(b_, n, active, work_items, adj, parent_.data());
+    return flag_components(n, min_size);
   }
 
   // Flags (flags_) the roots of union-find components of at least min_size elements and numbers
-  // them 1, 2, ... in raster order of their roots (scan_); returns how many.
+  // them 1, 2, ... in raster order of their roots (scan_); returns how many.  Host backends: the
+  // union-find need not be flat yet (the counting pass flattens it).
   std::int32_t flag_components(std::int64_t n, std::int32_t min_size) {
     b_.memset(count_.data(), 0, sizeof(std::int32_t) * n);
     if constexpr (Backend::host_accessible) {
@@ -446,10 +443,12 @@ class segmenter {
     const auto cand = view(cand_.data(), pw_, ph_);
     const float slope_inv_f = p_.adjacency_slope / std::min(std::abs(kp.fx), std::abs(kp.fy));
     const detail::covered_active covered{cov_l_.data(), cov_r_.data()};
-    components(n, covered, n,
-               detail::grid4_adjacency<detail::covered_active>{z, covered, p_.t_je, p_.t_je_quad, slope_inv_f},
-               parent_.data());
-    std::int32_t num_cand = number_components(n);
+    std::int32_t num_cand =
+        components(n, covered, n,
+                   detail::grid4_adjacency<detail::covered_active>{z, covered, p_.t_je, p_.t_je_quad, slope_inv_f},
+                   p_.t_size);
+    // each pixel's candidate id (0 for pixels of no kept component)
+    b_.for_each_index(n, detail::write_candidates_kernel{parent_.data(), flags_.data(), scan_.data(), cand_.data()});
     out.candidates = num_cand;
     b_.synchronize();
     out.times.candidates = ms_since(t);
@@ -488,10 +487,10 @@ class segmenter {
       erode_failed(b_, image_view<const std::int32_t>(cand_r), failed_.data(), round * p_.split_erode,
                    view(cov_l_.data(), cand_r.width, cand_r.height));
       const detail::mask_bit_active eroded{cov_l_.data(), 2};
-      components(n_r, eroded, n_r,
-                 detail::grid4_adjacency<detail::mask_bit_active>{z_r, eroded, p_.t_je, p_.t_je_quad, slope_inv_f},
-                 parent_.data());
-      const std::int32_t added = flag_components(n_r, p_.t_size);
+      const std::int32_t added =
+          components(n_r, eroded, n_r,
+                     detail::grid4_adjacency<detail::mask_bit_active>{z_r, eroded, p_.t_je, p_.t_je_quad, slope_inv_f},
+                     p_.t_size);
       detail::for_each_pixel(b_, cand_r.width, cand_r.height,
                              detail::write_members_kernel{parent_.data(), flags_.data(), scan_.data(), num_cand, cand_r});
       if (added == 0) break;
@@ -620,10 +619,11 @@ class segmenter {
     region_origin_.clear();
     if (p_.split_regions && num_planes > 0) {
       const std::uint16_t* lbl = la.data;
-      components(n, detail::nonzero_label_active{lbl}, n,
-                 detail::same_label_adjacency{image_view<const std::uint16_t>(la)}, parent_.data());
       const std::int32_t min_px = p_.min_region_pixels > 0 ? p_.min_region_pixels : p_.t_size;
-      const std::int32_t regions = std::min<std::int32_t>(flag_components(n, min_px), 65535);
+      const std::int32_t regions = std::min<std::int32_t>(
+          components(n, detail::nonzero_label_active{lbl}, n,
+                     detail::same_label_adjacency{image_view<const std::uint16_t>(la)}, min_px),
+          65535);
       origin_.resize(static_cast<std::size_t>(regions) + 1);
       b_.memset(origin_.data(), 0, sizeof(std::uint16_t) * (static_cast<std::size_t>(regions) + 1));
       b_.for_each_index(n, detail::region_relabel_kernel{parent_.data(), flags_.data(), scan_.data(), lbl, regions,

@@ -95,10 +95,8 @@ struct inlier_labels {
       for (int l = 0; l < L; ++l) {
         const std::int32_t c = cr[l];
         const std::int32_t gl = c > 0 ? static_cast<std::int32_t>(table[c > 0 ? c : 0]) : 0;
-        const float* q = planes + 4 * gl;
         const float z = zr[l];
-        const point3 p = proj(x + l, y, z);
-        const float d = fabsf(q[0] * p.x + q[1] * p.y + q[2] * p.z + q[3]);  // plane_distance's operations
+        const float d = plane_distance(planes, gl, proj(x + l, y, z));
         out[l] = ((gl != 0) & (z > 0.f) & (d <= tol[gl])) ? gl : 0;
       }
       return;

@@ -43,19 +43,26 @@ struct line_test {
     const int x1 = x0 + (len - 1) * Direction::dx, y1 = y0 + (len - 1) * Direction::dy;
     const point3 a = proj(x0, y0, depth(x0, y0)), b = proj(x1, y1, depth(x1, y1));
     const float chord = norm(b - a);
+    const float chord_tol = t_line * chord;
     int worst = -1;
     float worst_excess = 0.f;
     for (int k = 1; k < len - 1; ++k) {
       const int x = x0 + k * Direction::dx, y = y0 + k * Direction::dy;
       const float z = depth(x, y);
-      const float tol = t_line * chord + noise_k * sigma(z);
-      const float d = sqrtf(dist2_to_line(proj(x, y, z), a, b));
-      if (d - tol > worst_excess) {
-        worst_excess = d - tol;
+      const float e = excess(proj(x, y, z), z, a, b, chord_tol);
+      if (e > worst_excess) {
+        worst_excess = e;
         worst = k;
       }
     }
     return worst;
+  }
+
+  /// How far point p (depth z) lies beyond its tolerance chord_tol + noise_k * sigma(z) from the
+  /// chord a-b (negative: within it); operator() and worst_lanes share these operations.
+  EDGEPLANE_HD EDGEPLANE_INLINE float excess(point3 p, float z, point3 a, point3 b, float chord_tol) const {
+    const float tol = chord_tol + noise_k * sigma(z);
+    return sqrtf(dist2_to_line(p, a, b)) - tol;
   }
 
   /// operator()'s answer, computed 16 points at a time with the very same float operations (host
@@ -78,9 +85,8 @@ struct line_test {
       for (int j = 0; j < lanes; ++j) kl[j] = k + j < last ? k + j : last;
       for (int j = 0; j < lanes; ++j) zl[j] = z0[kl[j] * step];
     };
-    const auto excess = [&](int k, float z) {
-      const float tol = chord_tol + noise_k * sigma(z);
-      return sqrtf(dist2_to_line(proj(x0 + k * Direction::dx, y0 + k * Direction::dy, z), a, b)) - tol;
+    const auto excess_at = [&](int k, float z) {
+      return excess(proj(x0 + k * Direction::dx, y0 + k * Direction::dy, z), z, a, b, chord_tol);
     };
     if (last < 1) return -1;
     int kl[lanes];
@@ -88,7 +94,7 @@ struct line_test {
     for (int k = 1; k <= last; k += lanes) {
       gather(k, kl, zl);
       for (int j = 0; j < lanes; ++j) {
-        const float e = excess(kl[j], zl[j]);
+        const float e = excess_at(kl[j], zl[j]);
         most[j] = e > most[j] ? e : most[j];
       }
     }
@@ -98,7 +104,7 @@ struct line_test {
     for (int k = 1; k <= last; k += lanes) {
       gather(k, kl, zl);
       unsigned hit = 0;
-      for (int j = 0; j < lanes; ++j) hit |= (excess(kl[j], zl[j]) == m ? 1u : 0u) << j;
+      for (int j = 0; j < lanes; ++j) hit |= (excess_at(kl[j], zl[j]) == m ? 1u : 0u) << j;
       if (hit != 0) return k + __builtin_ctz(hit);
     }
     return -1;  // not reached: m is some point's excess
