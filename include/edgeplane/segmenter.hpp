@@ -224,7 +224,7 @@ class segmenter {
            z_proc_.capacity_bytes() + z_smooth_.capacity_bytes() + edges_.capacity_bytes() + mask_.capacity_bytes() + runs_.capacity_bytes() + cov_l_.capacity_bytes() +
            cov_r_.capacity_bytes() + parent_.capacity_bytes() + count_.capacity_bytes() + flags_.capacity_bytes() +
            scan_.capacity_bytes() + cand_.capacity_bytes() + failed_.capacity_bytes() + moments_.capacity_bytes() + bbox_.capacity_bytes() + table_.capacity_bytes() +
-           planes_.capacity_bytes() + tol_.capacity_bytes() + flag_.capacity_bytes() + grow_rows_.capacity_bytes() + lab_a_.capacity_bytes() + lab_b_.capacity_bytes() + lab_c_.capacity_bytes() +
+           planes_.capacity_bytes() + tol_.capacity_bytes() + flag_.capacity_bytes() + grow_counts_.capacity_bytes() + lab_a_.capacity_bytes() + lab_b_.capacity_bytes() + lab_c_.capacity_bytes() +
            lab_full_.capacity_bytes() + origin_.capacity_bytes();
   }
 
@@ -258,7 +258,7 @@ class segmenter {
     planes_.set_backend(b_);
     tol_.set_backend(b_);
     flag_.set_backend(b_);
-    grow_rows_.set_backend(b_);
+    grow_counts_.set_backend(b_);
     lab_a_.set_backend(b_);
     lab_b_.set_backend(b_);
     lab_c_.set_backend(b_);
@@ -582,16 +582,22 @@ class segmenter {
         b_.memset(flag_.data(), 0, sizeof(std::int32_t));
       }
     } else {
+      // host backends: per round, each row's count and list of the pixels it labelled (two sets,
+      // alternating; detail::grow_front_kernel).  The lists borrow the union-find's parent and
+      // count buffers, free from the candidates' last use until the regions' components.
+      [[maybe_unused]] const std::size_t hp = static_cast<std::size_t>(ph_) + 2;
       if constexpr (Backend::host_accessible) {
-        grow_rows_.resize(2 * (static_cast<std::size_t>(ph_) + 2));
-        b_.memset(grow_rows_.data(), 0, grow_rows_.size() * sizeof(std::int32_t));
+        grow_counts_.resize(2 * hp);
+        b_.memset(grow_counts_.data(), 0, 2 * hp * sizeof(std::int32_t));
       }
       for (int it = 0; it < p_.grow_iterations && num_planes > 0; ++it) {
         const detail::grow_kernel g{z, la, lb, proj, sigma, p_.grow_k, planes_.data(), tol_.data(), flag_.data()};
-        if constexpr (Backend::host_accessible) {  // rows whose neighbourhood did not change are skipped
-          std::int32_t* rows = grow_rows_.data();
-          const std::size_t hp = static_cast<std::size_t>(ph_) + 2;
-          b_.for_each_index(ph_, detail::grow_rows_kernel{g, rows + (it % 2) * hp, rows + (1 - it % 2) * hp, it == 0});
+        if constexpr (Backend::host_accessible) {  // only the growth front is evaluated
+          std::int32_t* counts = grow_counts_.data();
+          std::int32_t* lists[2] = {parent_.data(), count_.data()};
+          const int p = it % 2, q = 1 - p;
+          b_.for_each_index(ph_, detail::grow_front_kernel{g, counts + p * hp, lists[p], counts + q * hp, lists[q],
+                                                           it == 0});
         } else {
           detail::for_each_pixel(b_, pw_, ph_, g);
         }
@@ -691,7 +697,7 @@ class segmenter {
   buffer<std::int32_t, Backend> bbox_;
   buffer<std::uint16_t, Backend> table_;
   buffer<float, Backend> planes_, tol_;
-  buffer<std::int32_t, Backend> flag_, grow_rows_;
+  buffer<std::int32_t, Backend> flag_, grow_counts_;
   buffer<std::uint16_t, Backend> lab_a_, lab_b_, lab_c_, lab_full_, origin_;
   // host scratch, reused across frames
   std::vector<std::uint64_t> host_moments_, group_moments_;

@@ -101,25 +101,40 @@ TEST_CASE_TEMPLATE("grow_kernel: a pixel on the plane joins, one off it does not
   }
 }
 
-// Host backends grow by rows (detail::grow_rows_kernel), skipping rows whose neighbourhood the
-// previous round left unchanged; the result after every round must be the per-pixel rounds'.
-TEST_CASE("grow_rows_kernel: rounds that skip unchanged rows equal full rounds") {
-  const int w = 37, h = 90;
-  std::vector<float> depth(static_cast<std::size_t>(w) * h, 2.0f);  // the plane z = 2
+// Host backends grow by the front (detail::grow_front_kernel): after the first round, only the
+// unlabelled neighbours of the pixels the previous round labelled are evaluated, and the output
+// buffer (two rounds old) is brought up to date by the row lists.  The result after every round
+// must be the per-pixel rounds'.  Three planes grow from seeds until their fronts meet (which
+// one takes a pixel depends on the nearest plane and, on ties, the lowest label); noisy depth
+// leaves pixels out of every plane's tolerance, and invalid depth and a wall split the image.
+TEST_CASE("grow_front_kernel: rounds over the growth front equal full rounds") {
+  const int w = 41, h = 90;
+  std::vector<float> depth(static_cast<std::size_t>(w) * h, 2.0f);  // the plane z = 2...
+  std::uint32_t seed = 12345;
+  for (auto& d : depth) {  // ...with noise up to +-30 mm (the tolerance at 2 m is 22.5 mm)
+    seed = seed * 1664525u + 1013904223u;
+    d += 0.06f * (static_cast<float>(seed >> 8) / 16777216.f - 0.5f);
+  }
   for (int x = 0; x < w; ++x) depth[at(w, x, 45)] = 0.f;  // an invalid row: growth stops there...
   depth[at(w, 20, 45)] = 2.0f;                            // ...but for one gap
   for (int y = 60; y < 90; ++y) depth[at(w, 5, y)] = 2.1f;  // a ridge off the plane
+  for (int y = 0; y < 30; ++y) depth[at(w, 0, y)] = 0.f;    // invalid at the left border
   std::vector<std::uint16_t> start(depth.size(), 0);
-  for (int x = 0; x < 4; ++x) start[at(w, x, 2)] = 1;  // two seeds far apart
+  for (int x = 0; x < 4; ++x) start[at(w, x, 2)] = 1;  // seeds far apart, and two close together
   start[at(w, 30, 80)] = 2;
-  const std::vector<float> planes = {0, 0, 0, 0, 0, 0, -1, 2, 0, 0, -1, 2};
-  const std::vector<float> caps(3, 1e9f);
+  start[at(w, 40, 10)] = 3;
+  start[at(w, 34, 10)] = 2;
+  start[at(w, 20, 89)] = 3;
+  // planes 1 and 2: z = 2; plane 3: z = 2.01 (farther from most points, so it loses most ties)
+  const std::vector<float> planes = {0, 0, 0, 0, 0, 0, -1, 2, 0, 0, -1, 2, 0, 0, -1, 2.01f};
+  const std::vector<float> caps(4, 1e9f);
   const params p = presets::thesis_full();
-  std::vector<std::uint16_t> a = start, b1 = start, b2(start.size(), 0);  // b1, b2: the two buffers
-  std::vector<std::int32_t> rows(2 * (static_cast<std::size_t>(h) + 2), 0);
+  std::vector<std::uint16_t> a = start, b1 = start, b2(start.size(), 0xBEEF);  // b1, b2: the two buffers
+  const std::size_t hp = static_cast<std::size_t>(h) + 2, n = start.size();
+  std::vector<std::int32_t> counts(2 * hp, 0), lists(2 * n, -1);
   std::int32_t flag = 0;
   const cpu b{};
-  int skipped_rounds = 0;
+  int rounds_changed = 0, front_sum = 0;
   for (int it = 0; it < 60; ++it) {
     CAPTURE(it);
     std::vector<std::uint16_t> next(a.size());
@@ -128,22 +143,31 @@ TEST_CASE("grow_rows_kernel: rounds that skip unchanged rows equal full rounds")
                                    detail::make_noise(p.noise), p.grow_k, planes.data(), caps.data(), &flag};
     for (int y = 0; y < h; ++y)
       for (int x = 0; x < w; ++x) full(x, y);
+    int changed = 0;
+    for (std::size_t i = 0; i < n; ++i) changed += next[i] != a[i];
+    rounds_changed += changed > 0;
     a = next;
     std::vector<std::uint16_t>& in = it % 2 == 0 ? b1 : b2;
     std::vector<std::uint16_t>& out = it % 2 == 0 ? b2 : b1;
     const detail::grow_kernel g{make_view<const float>(depth.data(), w, h), make_view<const std::uint16_t>(in.data(), w, h),
                                 make_view(out.data(), w, h), detail::make_projector(camera(w, h)),
                                 detail::make_noise(p.noise), p.grow_k, planes.data(), caps.data(), &flag};
-    const std::size_t hp = static_cast<std::size_t>(h) + 2;
-    b.for_each_index(h, detail::grow_rows_kernel{g, rows.data() + (it % 2) * hp, rows.data() + (1 - it % 2) * hp, it == 0});
+    const int q = it % 2, r = 1 - q;
+    b.for_each_index(h, detail::grow_front_kernel{g, counts.data() + q * hp, lists.data() + q * n, counts.data() + r * hp,
+                                                  lists.data() + r * n, it == 0});
     REQUIRE(out == a);
-    int changed_rows = 0;
-    for (std::size_t y = 1; y <= static_cast<std::size_t>(h); ++y) changed_rows += rows[(1 - it % 2) * hp + y];
-    skipped_rounds += changed_rows > 0 && changed_rows < h - 10;
+    int listed = 0;  // the lists hold exactly the pixels this round labelled
+    for (int y = 0; y < h; ++y) listed += counts[r * hp + static_cast<std::size_t>(y) + 1];
+    CHECK(listed == changed);
+    front_sum += listed;
   }
-  CHECK(a[at(w, 36, 89)] == 2);  // growth reached the far corner...
-  CHECK(a[at(w, 0, 44)] == 1);   // ...and both sides of the invalid row
-  CHECK(skipped_rounds > 10);    // and most rounds skipped rows
+  CHECK(rounds_changed > 30);     // growth went on for many rounds
+  CHECK(a[at(w, 40, 89)] != 0);   // reached the far corner...
+  CHECK(a[at(w, 20, 45)] != 0);  // ...and the one gap in the invalid row
+  for (int y = 60; y < 90; ++y) CHECK(a[at(w, 5, y)] == 0);  // but not the ridge
+  CHECK(std::count(a.begin(), a.end(), 3) > 0);  // every plane took pixels
+  CHECK(std::count(a.begin(), a.end(), 0) > 50);  // and noise left pixels out
+  CHECK(front_sum < static_cast<int>(n));         // a front, not the image, each round
 }
 
 TEST_CASE_TEMPLATE("grow_kernel: a pixel between two regions takes the nearer plane", B, EDGEPLANE_TEST_BACKENDS) {

@@ -66,37 +66,65 @@ struct grow_kernel {
   }
 };
 
-/// Host form of a grow_kernel round, one work item per row y.  A round changes a row only if the
-/// round before changed it or a row next to it (the rows it reads): `prev` flags the rows the
-/// previous round changed (row y at prev[y + 1]; prev[0] and prev[h + 1] are 0), and rows with no
-/// flag among y - 1 .. y + 1 are skipped, since their output buffer, written two rounds ago,
-/// already holds them.  `cur` receives this round's flags; `all` (the first round) runs every row.
-struct grow_rows_kernel {
+/// Host form of a grow_kernel round, one work item per row y, that touches only the growth front.
+/// A pixel can change in round k only if one of its 4-neighbours changed in round k - 1: else
+/// its neighbourhood is the one round k - 1 saw, and the same inputs give the same (empty)
+/// answer.  So round k evaluates only the unlabelled neighbours of the pixels round k - 1
+/// labelled, which each row lists: row y's list (the x of every pixel it labelled) at
+/// xs_prev + y * w, its length at n_prev[y + 1] (n_prev[0] and n_prev[h + 1] are 0).  The output
+/// buffer holds the state of two rounds before (the buffers alternate), so a row first copies in
+/// its pixels that the previous round labelled; then out(x, y) != 0 marks a pixel this round
+/// already labelled or one labelled before, and a pixel is listed once.  The first round
+/// (`first`) evaluates every pixel and writes whole rows.  A row writes only its own pixels and
+/// list, and reads the previous round's buffer and lists: race-free, and the result after every
+/// round is grow_kernel's over all pixels.
+struct grow_front_kernel {
   grow_kernel px;
-  const std::int32_t* prev;
-  std::int32_t* cur;
-  bool all;
+  const std::int32_t* n_prev;
+  const std::int32_t* xs_prev;
+  std::int32_t* n_cur;
+  std::int32_t* xs_cur;
+  bool first;
   EDGEPLANE_HOST_CLONES EDGEPLANE_HD void operator()(std::int64_t row) const {
-    const int y = static_cast<int>(row);
-    if (!all && !(prev[y] | prev[y + 1] | prev[y + 2])) {
-      cur[y + 1] = 0;
+    const int y = static_cast<int>(row), w = px.in.width, h = px.in.height;
+    std::int32_t* list = xs_cur + static_cast<std::int64_t>(y) * w;
+    std::int32_t m = 0;
+    std::uint16_t* o = &px.out(0, y);
+    const std::uint16_t* mid = &px.in(0, y);
+    if (!first) {
+      const std::int32_t* own = xs_prev + static_cast<std::int64_t>(y) * w;
+      const std::int32_t n_own = n_prev[y + 1];
+      for (std::int32_t i = 0; i < n_own; ++i) o[own[i]] = mid[own[i]];
+      auto visit = [&](int x) {
+        if (o[x] != 0) return;  // labelled before, or by this round already
+        px(x, y);
+        if (o[x] != 0) list[m++] = x;
+      };
+      for (int v = y - 1; v <= y + 1; v += 2) {
+        if (v < 0 || v >= h) continue;
+        const std::int32_t* other = xs_prev + static_cast<std::int64_t>(v) * w;
+        for (std::int32_t i = 0, e = n_prev[v + 1]; i < e; ++i) visit(other[i]);
+      }
+      for (std::int32_t i = 0; i < n_own; ++i) {
+        const int x = own[i];
+        if (x > 0) visit(x - 1);
+        if (x + 1 < w) visit(x + 1);
+      }
+      n_cur[y + 1] = m;
       return;
     }
-    int any = 0, x = 0;
-    const int w = px.in.width;
+    int x = 0;
 #if !defined(__CUDA_ARCH__)
-    const int h = px.in.height;
     // Runs of 16 pixels (with both neighbouring rows and columns inside the image) where no pixel
     // can take a label, since each is labelled, invalid, or has no labelled 4-neighbour: grow_kernel
     // writes their input unchanged, so they are copied.
     constexpr int lanes = 16;
     if (y >= 1 && y + 1 < h) {
-      const std::uint16_t *up = &px.in(0, y - 1), *mid = &px.in(0, y), *down = &px.in(0, y + 1);
+      const std::uint16_t *up = &px.in(0, y - 1), *down = &px.in(0, y + 1);
       const float* z = &px.depth(0, y);
-      std::uint16_t* o = &px.out(0, y);
       x = 1;
       px(0, y);
-      any |= o[0] != mid[0];
+      if (o[0] != mid[0]) list[m++] = 0;
       for (; x + lanes < w; x += lanes) {
         int open = 0;
         for (int l = 0; l < lanes; ++l) {
@@ -110,16 +138,16 @@ struct grow_rows_kernel {
         }
         for (int l = 0; l < lanes; ++l) {
           px(x + l, y);
-          any |= o[x + l] != mid[x + l];
+          if (o[x + l] != mid[x + l]) list[m++] = x + l;
         }
       }
     }
 #endif
     for (; x < w; ++x) {
       px(x, y);
-      any |= px.out(x, y) != px.in(x, y);
+      if (o[x] != mid[x]) list[m++] = x;
     }
-    cur[y + 1] = any;
+    n_cur[y + 1] = m;
   }
 };
 
