@@ -420,7 +420,7 @@ class segmenter {
     cov_l_.resize(n);
     const auto edges = view(edges_.data(), pw_, ph_), mask = view(mask_.data(), pw_, ph_),
                scratch8 = view(cov_l_.data(), pw_, ph_);
-    if constexpr (detail::row_lanes<Backend> > 1) runs_.resize(edge_scratch_bytes(pw_, ph_, pw_));
+    if constexpr (detail::row_lanes<Backend> > 1) runs_.resize(edge_scratch_bytes(pw_, ph_, p_));
     detect_edges(b_, z, kp, p_, edges, runs_.data());
     close_edges(b_, edges, scratch8, mask, p_.edge_closing_radius);
     b_.synchronize();

@@ -206,24 +206,33 @@ std::vector<float> row_kernel_scene(int w, int h, const intrinsics& k, bool hole
       if ((x - 60) * (x - 60) + (y - 60) * (y - 60) < 200) v -= 0.02;               // a disc in front
       z[static_cast<std::size_t>(y) * w + x] = static_cast<float>(v) + noise(0.002f);
     }
+  auto invalid = [&](int x, int y) {  // (the small images hold only part of the scene)
+    if (x < w && y < h) z[static_cast<std::size_t>(y) * w + x] = 0.f;
+  };
   for (int y = 100; y < 108; ++y)
-    for (int x = 170; x < 180; ++x) z[static_cast<std::size_t>(y) * w + x] = 0.f;  // hole
+    for (int x = 170; x < 180; ++x) invalid(x, y);  // hole
   if (holes) {
     for (int i = 0; i < w * h / 40; ++i) z[noise.next_u32(static_cast<std::uint32_t>(w * h))] = 0.f;  // pepper
     for (int y = 50; y < 53; ++y)
-      for (int x = 0; x < 90; ++x) z[static_cast<std::size_t>(y) * w + x] = 0.f;  // a band from the border
+      for (int x = 0; x < 90; ++x) invalid(x, y);  // a band from the border
     // invalid columns two pixels either side of the step: jumps whose side holds one neighbour
-    for (int y = 0; y < h; ++y) z[static_cast<std::size_t>(y) * w + (y < h / 2 ? 138 : 141)] = 0.f;
+    for (int y = 0; y < h; ++y) invalid(y < h / 2 ? 138 : 141, y);
   }
   return z;
 }
 }  // namespace
 
 TEST_CASE("detect_edges: the 16-pixel row kernel gives the per-pixel kernel's edge map") {
-  const int w = 203, h = 157;  // not a multiple of 16
+  // 203 x 157: not a multiple of 16; 17 x 9 and 40 x 3: images narrower or lower than the reach,
+  // whose runs read far into the point planes' padding rows
+  const int sizes[3][2] = {{203, 157}, {17, 9}, {40, 3}};
   const intrinsics k{180.f, 180.f, 101.f, 78.f};
+  for (const auto& size : sizes)
   for (const bool holes : {false, true})
-    for (const int pitch : {w, w + 21}) {
+    for (const int pitch : {size[0], size[0] + 21}) {
+      const int w = size[0], h = size[1];
+      const bool large = w > 100;
+      CAPTURE(w);
       CAPTURE(holes);
       CAPTURE(pitch);
       const std::vector<float> dense = row_kernel_scene(w, h, k, holes);
@@ -248,6 +257,10 @@ TEST_CASE("detect_edges: the 16-pixel row kernel gives the per-pixel kernel's ed
       loose.n_ee = 3;
       loose.t_ee = 0.999f;
       sets.emplace_back("loose corners", loose);
+      params longest = presets::thesis_full();  // the longest arms validate() allows: reach 32
+      longest.n_coe = 32;
+      longest.n_cue = 32;
+      sets.emplace_back("reach 32", longest);
       for (const auto& set_of : sets) {  // (not a structured binding: clang 14 cannot capture one)
         const std::string& name = set_of.first;
         const params& p = set_of.second;
@@ -268,8 +281,10 @@ TEST_CASE("detect_edges: the 16-pixel row kernel gives the per-pixel kernel's ed
           edges += pixels[i] != 0 && pixels[i] != edge_invalid;
         }
         CHECK(differ == 0);
-        CHECK(edges > 100);                 // the scene has edges of several kinds...
-        CHECK(edges < static_cast<int>(dense.size()) / 3);  // ...and mostly surface
+        if (large) {
+          CHECK(edges > 100);                 // the scene has edges of several kinds...
+          CHECK(edges < static_cast<int>(dense.size()) / 3);  // ...and mostly surface
+        }
       }
     }
 }

@@ -117,33 +117,61 @@ struct interior_columns_kernel {
   }
 };
 
+/// The edge pass's point planes on host backends: depth, X and Y of every pixel (floats, in that
+/// order), each a dense w-wide image with pad_rows rows of zeros above and below, as many as a
+/// run's neighbours r steps of up to w + 1 elements away can reach: r + ceil(r / w).
+struct edge_points_layout {
+  int w, pad_rows;
+  std::int64_t plane, z, x, y;  // elements per plane; each plane's first element
+  EDGEPLANE_HD edge_points_layout(int width, int height, int r)
+      : w(width), pad_rows(r + (r + width - 1) / width), plane(static_cast<std::int64_t>(height + 2 * pad_rows) * width),
+        z(0), x(plane), y(2 * plane) {}
+  /// the element of pixel (u, v) within a plane
+  EDGEPLANE_HD std::int64_t offset(int u, int v) const { return static_cast<std::int64_t>(v + pad_rows) * w + u; }
+  EDGEPLANE_HD std::int64_t elements() const { return 3 * plane; }
+};
+
 /// Valid-neighbour counts, the neighbourhood's nl and nr for every pixel and direction at once:
 /// plane 2 d + s of `runs` (8 dense w x h byte planes, d in the order horizontal, vertical, left
 /// diagonal, right diagonal; s = 0 the left side (-dx, -dy), 1 the right side) holds how many
 /// consecutive valid pixels follow the pixel on that side, at most r (0..r, r <= 255), stopping
 /// at the image border.  The horizontal planes: one work item per row, a running count.
-/// It also writes the validity plane the bands read (0xff valid, 0 invalid) and, with xs and ys
-/// given, the X and Y of every pixel's back-projected point (the projector's operations, so the
-/// same floats) into those planes, laid out like `depth` (its pitch), for the edge pass's row runs.
+/// It also writes the validity plane the bands read (0xff valid, 0 invalid) and, with `points`
+/// given, the depth and the X and Y of every pixel's back-projected point (the projector's
+/// operations, so the same floats) into the three planes of edge_points_layout, which pad the
+/// image with rows of zeros (invalid) so that the edge pass's row runs can read every neighbour
+/// they may look at without a bounds check.  Item 0 also zeroes the padding rows above the image,
+/// item h - 1 those below.
 struct valid_runs_rows_kernel {
   image_view<const float> depth;
   std::uint8_t* runs;
   int r;
   std::uint8_t* valid;  // dense w x h: 0xff where depth is valid, 0 elsewhere (for the bands)
   projector proj{};
-  float* xs = nullptr;
-  float* ys = nullptr;
+  float* points = nullptr;  // edge_points_layout(w, h, r).bytes, or null
   EDGEPLANE_HOST_CLONES EDGEPLANE_HD void operator()(std::int64_t row) const {
     const int y = static_cast<int>(row), w = depth.width;
     std::uint8_t* vr = valid + static_cast<std::int64_t>(y) * w;
     for (int x = 0; x < w; ++x) vr[x] = static_cast<std::uint8_t>(0u - static_cast<unsigned>(depth(x, y) > 0.f));
-    if (xs != nullptr) {
-      const std::ptrdiff_t o = static_cast<std::ptrdiff_t>(y) * depth.pitch;
+    if (points != nullptr) {
+      const edge_points_layout at(w, depth.height, r);
+      float* zs = points + at.z + at.offset(0, y);
+      float* xs = points + at.x + at.offset(0, y);
+      float* ys = points + at.y + at.offset(0, y);
+      const float* d = &depth(0, y);
       for (int x = 0; x < w; ++x) {
-        const point3 p = proj(x, y, depth.data[o + x]);
-        xs[o + x] = p.x;
-        ys[o + x] = p.y;
+        const point3 p = proj(x, y, d[x]);
+        zs[x] = d[x];
+        xs[x] = p.x;
+        ys[x] = p.y;
       }
+      const std::int64_t pad = static_cast<std::int64_t>(at.pad_rows) * w;
+      if (y == 0)
+        for (const std::int64_t plane : {at.z, at.x, at.y})
+          for (std::int64_t i = 0; i < pad; ++i) points[plane + i] = 0.f;
+      if (y == depth.height - 1)
+        for (const std::int64_t plane : {at.z, at.x, at.y})
+          for (std::int64_t i = 0; i < pad; ++i) points[plane + at.offset(0, y + 1) + i] = 0.f;
     }
     const std::int64_t n = static_cast<std::int64_t>(w) * depth.height, o = static_cast<std::int64_t>(y) * w;
     std::uint8_t* left = runs + o;
@@ -232,10 +260,8 @@ struct all_edges_kernel {
   edge_set set;
   int reach;
   const std::uint8_t* runs = nullptr;  // 8 dense planes of valid-neighbour counts, or null
-  // X and Y of every pixel's back-projected point, laid out like depth (the host's row runs need
-  // them, with runs)
-  const float* xs = nullptr;
-  const float* ys = nullptr;
+  // the point planes of edge_points_layout (the host's row runs need them, with runs)
+  const float* points = nullptr;
 
   template <class Direction, int D>
   EDGEPLANE_HD EDGEPLANE_INLINE std::uint8_t along(int x, int y, bool interior, unsigned tests) const {
@@ -286,7 +312,6 @@ template <int Lanes>
 struct all_edges_rows_kernel {
   all_edges_kernel px;
   int chunks;  // runs per row: ceil(width / Lanes)
-  static constexpr int max_tile_reach = 32;  // the largest reach validate() allows (n_coe, n_cue <= 32)
 
   // farther_than(p, a, b, t, noise) is surely false (its shortcut), for lane-wise points.
   EDGEPLANE_HD EDGEPLANE_INLINE static bool surely_not_farther(point3 p, point3 a, point3 b, float t, float noise) {
@@ -300,7 +325,7 @@ struct all_edges_rows_kernel {
   }
 
   // The lanes' pixels: depth, and the X and Y of their back-projected points (valid_runs_rows_kernel),
-  // at the same offsets.  c[i] is the depth i elements from lane 0's pixel.
+  // at the same offsets in the padded point planes.  c[i] is the depth i elements from lane 0's pixel.
   struct lane_points {
     const float* z;
     const float* x;
@@ -514,41 +539,18 @@ struct all_edges_rows_kernel {
   EDGEPLANE_HOST_CLONES EDGEPLANE_HD void operator()(std::int64_t item) const {
     const int y = static_cast<int>(item / chunks), x0 = static_cast<int>(item % chunks) * Lanes;
     const int w = px.depth.width, h = px.depth.height, r = px.reach;
-    // Every lane reads up to r steps of up to pitch + 1 elements either way: those reads must stay
-    // within the view's rows (else they read a copy, below), and a run must not pass the row's end.
-    const std::int64_t first = static_cast<std::int64_t>(y) * px.depth.pitch + x0,
-                       reach_span = static_cast<std::int64_t>(r) * (px.depth.pitch + 1);
-    if (x0 + Lanes > w || r > max_tile_reach) {
-      const int x1 = x0 + Lanes < w ? x0 + Lanes : w;
-      for (int x = x0; x < x1; ++x) px(x, y);
+    // A run must not pass the row's end.  Every lane reads up to r steps of up to w + 1 elements
+    // either way, in the padded point planes (zeros, invalid, beyond the top and bottom rows; a
+    // step past the first or last column lands in the row before or after): garbage that the
+    // counts mask.
+    if (x0 + Lanes > w) {
+      for (int x = x0; x < w; ++x) px(x, y);
       return;
     }
-    std::ptrdiff_t pitch = px.depth.pitch;
-    lane_points c{px.depth.data + first, px.xs + first, px.ys + first};
-    constexpr int tile_size = (2 * max_tile_reach + 1) * (Lanes + 2 * max_tile_reach);
-    float tile[3][tile_size];
-    if (first < reach_span || first + Lanes - 1 + reach_span > static_cast<std::int64_t>(h - 1) * pitch + w - 1) {
-      // Near the top or bottom (or a view's first or last columns): the lanes' reads would leave
-      // the view's rows, so they read a copy of the window instead, rows y - r .. y + r and columns
-      // x0 - r .. x0 + Lanes - 1 + r, with 0 (invalid) outside the image.  The pre-tests see the
-      // same values at the same coordinates, and the counts still mask everything outside.
-      const int tp = Lanes + 2 * r;
-      for (int dy = -r; dy <= r; ++dy) {
-        const std::ptrdiff_t o = static_cast<std::ptrdiff_t>(dy + r) * tp;
-        const int v = y + dy;
-        for (int j = 0; j < tp; ++j) {
-          const int u = x0 - r + j;
-          const bool in = v >= 0 && v < h && u >= 0 && u < w;
-          const std::ptrdiff_t i = in ? static_cast<std::ptrdiff_t>(v) * px.depth.pitch + u : 0;
-          tile[0][o + j] = in ? px.depth.data[i] : 0.f;
-          tile[1][o + j] = in ? px.xs[i] : 0.f;
-          tile[2][o + j] = in ? px.ys[i] : 0.f;
-        }
-      }
-      pitch = tp;
-      const std::ptrdiff_t o = static_cast<std::ptrdiff_t>(r) * tp + r;
-      c = lane_points{tile[0] + o, tile[1] + o, tile[2] + o};
-    }
+    const std::ptrdiff_t pitch = w;
+    const edge_points_layout at(w, h, r);
+    const std::int64_t first = at.offset(x0, y);
+    const lane_points c{px.points + at.z + first, px.points + at.x + first, px.points + at.y + first};
     const std::int64_t n = static_cast<std::int64_t>(w) * h, i0 = static_cast<std::int64_t>(y) * w + x0;
     float zc[Lanes], noise_co[Lanes], noise_cu[Lanes];
     unsigned maybe[Lanes];
@@ -700,32 +702,29 @@ void detect_edge(const Backend& b, image_view<const float> depth, const intrinsi
 }
 
 namespace detail {
-/// The layout of detect_edges' host scratch for a depth view of w x h (w, h > 0) with row pitch
-/// `pitch` (elements), as byte offsets: the valid-neighbour counts (8 w x h bytes), the validity
-/// plane (w x h bytes), then, 64-byte aligned, the back-projected X and Y planes (floats laid out
-/// like the depth view).
+/// The layout of detect_edges' host scratch for a w x h image (w, h > 0) and the edge tests'
+/// reach r, as byte offsets: the valid-neighbour counts (8 w x h bytes), the validity plane (w x h
+/// bytes), then, 64-byte aligned, the point planes (edge_points_layout).
 struct edge_scratch_layout {
-  std::size_t valid, xs, ys, bytes;
-  edge_scratch_layout(int w, int h, std::ptrdiff_t pitch) {
+  std::size_t valid, points, bytes;
+  edge_scratch_layout(int w, int h, int r) {
     const std::size_t n = static_cast<std::size_t>(w) * static_cast<std::size_t>(h);
-    const std::size_t span = static_cast<std::size_t>(h - 1) * static_cast<std::size_t>(pitch) + static_cast<std::size_t>(w);
     valid = 8 * n;
-    xs = (9 * n + 63) / 64 * 64;
-    ys = xs + span * sizeof(float);
-    bytes = ys + span * sizeof(float);
+    points = (9 * n + 63) / 64 * 64;
+    bytes = points + static_cast<std::size_t>(edge_points_layout(w, h, r).elements()) * sizeof(float);
   }
 };
 }  // namespace detail
 
-/// Bytes of detect_edges' host scratch for a depth view of w x h with row pitch `pitch` (elements)
-/// (see detail::edge_scratch_layout).
-inline std::size_t edge_scratch_bytes(int w, int h, std::ptrdiff_t pitch) {
-  return w > 0 && h > 0 ? detail::edge_scratch_layout(w, h, pitch).bytes : 0;
+/// Bytes of detect_edges' host scratch for a w x h image under params p (see
+/// detail::edge_scratch_layout).
+inline std::size_t edge_scratch_bytes(int w, int h, const params& p) {
+  return w > 0 && h > 0 ? detail::edge_scratch_layout(w, h, detail::make_edge_set(p).reach()).bytes : 0;
 }
 
 /// All enabled edge types over the four directions in one pass: writes every pixel of `edges`
-/// (edge_bits; edge_invalid where depth is invalid).  `scratch`: edge_scratch_bytes(w, h,
-/// depth.pitch) bytes of the backend's memory, 64-byte aligned, used by host backends (null:
+/// (edge_bits; edge_invalid where depth is invalid).  `scratch`: edge_scratch_bytes(w, h, p)
+/// bytes of the backend's memory, 64-byte aligned, used by host backends (null:
 /// allocated per call) for the valid-neighbour counts and the back-projected points.  Device
 /// backends mark, in `edges` itself, the pixels whose whole neighbourhood is valid, and count
 /// the neighbours of the others in the edge pass.  Asynchronous on device backends.
@@ -743,20 +742,18 @@ void detect_edges(const Backend& b, image_view<const float> depth, const intrins
   if constexpr (detail::row_lanes<Backend> > 1) {
     if (scratch == nullptr) {
       own = buffer<std::uint8_t, Backend>(b);
-      own.resize(edge_scratch_bytes(w, h, depth.pitch));
+      own.resize(edge_scratch_bytes(w, h, p));
       scratch = own.data();
     }
-    const detail::edge_scratch_layout at(w, h, depth.pitch);
+    const detail::edge_scratch_layout at(w, h, reach);
     std::uint8_t* runs = scratch;
     std::uint8_t* valid = scratch + at.valid;
-    float* xs = reinterpret_cast<float*>(scratch + at.xs);
-    float* ys = reinterpret_cast<float*>(scratch + at.ys);
+    float* points = reinterpret_cast<float*>(scratch + at.points);
     constexpr int band = 32;
-    b.for_each_index(h, detail::valid_runs_rows_kernel{depth, runs, reach, valid, px.proj, xs, ys});
+    b.for_each_index(h, detail::valid_runs_rows_kernel{depth, runs, reach, valid, px.proj, points});
     b.for_each_index((h + band - 1) / band, detail::valid_runs_bands_kernel{depth, runs, reach, band, valid});
     px.runs = runs;
-    px.xs = xs;
-    px.ys = ys;
+    px.points = points;
   } else {
     b.for_each_index(h, detail::interior_rows_kernel{depth, edges, reach});
     b.for_each_index(w, detail::interior_columns_kernel{edges, reach});
