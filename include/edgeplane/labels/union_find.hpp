@@ -168,7 +168,10 @@ struct uf_flatten_kernel {
 struct covered_active {
   const std::uint8_t* a;
   const std::uint8_t* b;
-  EDGEPLANE_HD bool operator()(std::int64_t i) const { return a[i] != 0 || (b != nullptr && b[i] != 0); }
+  EDGEPLANE_HD bool operator()(std::int64_t i) const {
+    const std::uint8_t* c = b != nullptr ? b : a;  // loop-invariant: the test itself does not branch
+    return (a[i] | c[i]) != 0;
+  }
 };
 
 /// Pixels of failed candidates (failed[cand[i]] != 0) whose whole (2r+1)^2 window lies in the same
