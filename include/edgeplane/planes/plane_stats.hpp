@@ -150,15 +150,18 @@ EDGEPLANE_HD EDGEPLANE_INLINE std::uint64_t mul_fixed(std::uint64_t a, std::uint
                                     static_cast<std::int32_t>(b));
 }
 
-/// One work item per row: accumulates the moments of the pixels of one label locally and flushes
-/// them with atomic adds when another label begins (a row holds few labels, so few atomics).
-/// Unlabelled pixels (label 0) between pixels of one label do not end its run: a plane's
-/// scattered outliers or holes then cost no flush (the two threads of a small machine would
-/// otherwise take turns on the label's counters at every one).  The bounding box is that of the
-/// label's pixels in the run.  Sums are kept as uint64 (two's complement: wrapping, so the order of
-/// additions cannot matter, and the totals fit an int64 by fixed_point_max_depth).  On the host,
-/// runs of 8 pixels whose labels are the current one or 0 are summed lane by lane (vectorizable);
-/// the lanes are folded in at each flush.
+/// One work item per `block` rows (rows row0 .. row_end - 1): accumulates the moments of the
+/// pixels of one label locally and hands them on when another label begins.  Unlabelled pixels
+/// (label 0) between pixels of one label do not end its run: a plane's scattered outliers or holes
+/// then cost no hand-over.  The bounding box is that of the label's pixels in the run.  Device
+/// backends add each run's sums to the label's counters with atomics (a row holds few labels, so
+/// few atomics).  Host backends keep the sums of the last few labels of the work item in a small
+/// table and add them to the counters when an entry is evicted and at the item's end: a block of
+/// rows sees the same few labels over and over, and on two cores the label's counters would
+/// otherwise move between the cores' caches at every run.  Sums are kept as uint64 (two's
+/// complement: wrapping, so the order of additions cannot matter, and the totals fit an int64 by
+/// fixed_point_max_depth).  On the host, runs of 8 pixels whose labels are the current one or 0
+/// are summed lane by lane (vectorizable); the lanes are folded in at each hand-over.
 template <class Labels>
 struct moments_kernel {
   image_view<const float> depth;
@@ -167,21 +170,72 @@ struct moments_kernel {
   std::int32_t num_labels;
   std::uint64_t* moments;  // (num_labels + 1) * moment_slots; slot block of label L at L * moment_slots
   std::int32_t* bbox;      // (num_labels + 1) * 4
-  int row0 = 0;            // work item k is row row0 + k
+  int row0 = 0;            // work item k covers rows row0 + k * block .. (before row_end)
+  int row_end = 0;
+  int block = 1;
 
   static constexpr int lanes = 8;
 
-  EDGEPLANE_HD void flush(std::int32_t l, const std::uint64_t* s, int x0, int x1, int y) const {
+  // adds sums s and box [x0, x1] x [y0, y1] of label l to its counters
+  EDGEPLANE_HD void publish(std::int32_t l, const std::uint64_t* s, int x0, int y0, int x1, int y1) const {
     if (l <= 0 || l > num_labels) return;
     std::uint64_t* m = moments + static_cast<std::int64_t>(l) * moment_slots;
     for (int k = 0; k < moment_slots; ++k)
       if (s[k] != 0) atomic_add(m + k, s[k]);
     std::int32_t* bb = bbox + static_cast<std::int64_t>(l) * 4;
     atomic_min(bb + 0, x0);
-    atomic_min(bb + 1, y);
+    atomic_min(bb + 1, y0);
     atomic_max(bb + 2, x1);
-    atomic_max(bb + 3, y);
+    atomic_max(bb + 3, y1);
   }
+  // hand-over to the counters at once (device backends)
+  struct direct {
+    const moments_kernel* k;
+    EDGEPLANE_HD explicit direct(const moments_kernel* kernel) : k(kernel) {}
+    EDGEPLANE_HD void operator()(std::int32_t l, const std::uint64_t* s, int x0, int x1, int y) const {
+      k->publish(l, s, x0, y, x1, y);
+    }
+    EDGEPLANE_HD void drain() {}
+  };
+  // hand-over to a table of the work item's last `entries` labels (host backends)
+  struct table {
+    static constexpr int entries = 8;
+    const moments_kernel* k;
+    std::int32_t label[entries];
+    std::uint64_t sums[entries][moment_slots];
+    int box[entries][4];
+    int used = 0, next = 0;
+    explicit table(const moments_kernel* kernel) : k(kernel) {}
+    void operator()(std::int32_t l, const std::uint64_t* s, int x0, int x1, int y) {
+      if (l <= 0 || l > k->num_labels) return;
+      int e = 0;
+      while (e < used && label[e] != l) ++e;
+      if (e == used) {
+        if (used < entries) {
+          ++used;
+        } else {  // evict the entries in turn
+          e = next;
+          next = (next + 1) % entries;
+          k->publish(label[e], sums[e], box[e][0], box[e][1], box[e][2], box[e][3]);
+        }
+        label[e] = l;
+        for (int j = 0; j < moment_slots; ++j) sums[e][j] = 0;
+        box[e][0] = x0;
+        box[e][1] = y;
+        box[e][2] = x1;
+        box[e][3] = y;
+      }
+      for (int j = 0; j < moment_slots; ++j) sums[e][j] += s[j];
+      box[e][0] = x0 < box[e][0] ? x0 : box[e][0];
+      box[e][1] = y < box[e][1] ? y : box[e][1];
+      box[e][2] = x1 > box[e][2] ? x1 : box[e][2];
+      box[e][3] = y > box[e][3] ? y : box[e][3];
+    }
+    void drain() {
+      for (int e = 0; e < used; ++e) k->publish(label[e], sums[e], box[e][0], box[e][1], box[e][2], box[e][3]);
+      used = 0;
+    }
+  };
 
   // pixel (x, y) of label l > 0 into the sums s
   EDGEPLANE_HD EDGEPLANE_INLINE void add(std::uint64_t* s, int x, int y) const {
@@ -203,10 +257,11 @@ struct moments_kernel {
     s[9] += mul_fixed(pz, pz);
   }
 
-  // pixel x of label l of the scalar path: a label other than 0 and the current one flushes the
-  // current run (its pixels span x0 .. x1) and starts its own
-  EDGEPLANE_HD EDGEPLANE_INLINE void step(std::uint64_t* s, std::int32_t& cur, int& x0, int& x1, std::int32_t l, int x,
-                                          int y) const {
+  // pixel x of label l of the scalar path: a label other than 0 and the current one hands over
+  // the current run (its pixels span x0 .. x1) and starts its own
+  template <class Out>
+  EDGEPLANE_HD EDGEPLANE_INLINE void step(Out& flush, std::uint64_t* s, std::int32_t& cur, int& x0, int& x1,
+                                          std::int32_t l, int x, int y) const {
     if (l == 0) return;
     if (l != cur) {
       flush(cur, s, x0, x1, y);
@@ -218,8 +273,20 @@ struct moments_kernel {
     if (l > 0) add(s, x, y);
   }
 
-  EDGEPLANE_HOST_CLONES EDGEPLANE_HD void operator()(std::int64_t row) const {
-    const int y = row0 + static_cast<int>(row), w = depth.width;
+  EDGEPLANE_HOST_CLONES EDGEPLANE_HD void operator()(std::int64_t item) const {
+    const int y0 = row0 + static_cast<int>(item) * block, y1 = y0 + block < row_end ? y0 + block : row_end;
+#if !defined(__CUDA_ARCH__)
+    table out(this);
+#else
+    direct out(this);
+#endif
+    for (int y = y0; y < y1; ++y) row(y, out);
+    out.drain();
+  }
+
+  template <class Out>
+  EDGEPLANE_HD EDGEPLANE_INLINE void row(int y, Out& flush) const {
+    const int w = depth.width;
     std::uint64_t s[moment_slots] = {};
     std::int32_t cur = 0;
     int x0 = 0, x1 = 0, x = 0;
@@ -284,12 +351,12 @@ struct moments_kernel {
       }
       for (int l = 0; l < lanes; ++l) {
         if (lab[l] != 0 && lab[l] != cur) fold();
-        step(s, cur, x0, x1, lab[l], x + l, y);
+        step(flush, s, cur, x0, x1, lab[l], x + l, y);
       }
     }
     fold();
 #endif
-    for (; x < w; ++x) step(s, cur, x0, x1, label_of(x, y), x, y);
+    for (; x < w; ++x) step(flush, s, cur, x0, x1, label_of(x, y), x, y);
     flush(cur, s, x0, x1, y);
   }
 };
@@ -359,9 +426,15 @@ void accumulate_moments(const Backend& b, image_view<const float> depth, const i
   if (row_begin < 0) row_begin = 0;
   b.memset(moments, 0, sizeof(std::uint64_t) * moment_slots * (num_labels + 1));
   b.for_each_index(num_labels + 1, detail::bbox_init_kernel{bbox});
-  if (row_end > row_begin)
-    b.for_each_index(row_end - row_begin, detail::moments_kernel<Labels>{depth, label_of, detail::make_projector(k),
-                                                                         num_labels, moments, bbox, row_begin});
+  if (row_end > row_begin) {
+    // host backends: blocks of rows (each hands its labels' sums over once), still 64 or more
+    // work items where there are that many rows (the CPU backend runs fewer items serially)
+    const int rows = row_end - row_begin;
+    const int block = Backend::host_accessible && rows >= 128 ? rows / 64 : 1;
+    b.for_each_index((rows + block - 1) / block,
+                     detail::moments_kernel<Labels>{depth, label_of, detail::make_projector(k), num_labels, moments, bbox,
+                                                    row_begin, row_end, block});
+  }
 }
 
 }  // namespace edgeplane
