@@ -220,7 +220,7 @@ class segmenter {
   image_view<const std::uint8_t> edge_mask() const { return view(mask_.data(), pw_, ph_); }
   /// Bytes of scratch memory held in the backend's memory.
   std::size_t scratch_bytes() const {
-    return raw_in_.capacity_bytes() + z_a_.capacity_bytes() + z_b_.capacity_bytes() + z_c_.capacity_bytes() +
+    return raw_in_.capacity_bytes() + z_a_.capacity_bytes() + z_b_.capacity_bytes() +
            z_proc_.capacity_bytes() + z_smooth_.capacity_bytes() + edges_.capacity_bytes() + mask_.capacity_bytes() + runs_.capacity_bytes() + cov_l_.capacity_bytes() +
            cov_r_.capacity_bytes() + parent_.capacity_bytes() + count_.capacity_bytes() + flags_.capacity_bytes() +
            scan_.capacity_bytes() + cand_.capacity_bytes() + failed_.capacity_bytes() + moments_.capacity_bytes() + bbox_.capacity_bytes() + table_.capacity_bytes() +
@@ -238,7 +238,6 @@ class segmenter {
     raw_in_.set_backend(b_);
     z_a_.set_backend(b_);
     z_b_.set_backend(b_);
-    z_c_.set_backend(b_);
     z_proc_.set_backend(b_);
     z_smooth_.set_backend(b_);
     edges_.set_backend(b_);
@@ -377,7 +376,6 @@ class segmenter {
     const intrinsics kp = down ? scaled(k, 2) : k;
     z_a_.resize(n_full);
     z_b_.resize(n_full);
-    z_c_.resize(n_full);
     image_view<const In> src = depth_in;
     if (!Backend::host_accessible && !on_backend) {
       raw_in_.resize(n_full * sizeof(In));
@@ -389,15 +387,14 @@ class segmenter {
           b_.copy_from_host(dst + static_cast<std::int64_t>(y) * w, &depth_in(0, y), sizeof(In) * w);
       src = image_view<const In>{dst, w, h, w};
     }
-    const auto za = view(z_a_.data(), w, h), zb = view(z_b_.data(), w, h), zc = view(z_c_.data(), w, h);
+    const auto za = view(z_a_.data(), w, h), zb = view(z_b_.data(), w, h);
     // Deeper than the exact fixed-point statistics hold (hundreds of metres for real cameras) is
     // invalid, like depth beyond max_depth.
     const float max_depth = std::min(p_.max_depth, fixed_point_max_depth(k, w, h));
     convert_depth(b_, src, scale, p_.min_depth, max_depth, za);
     image_view<float> z_full = za;
     if (p_.depth_closing_radius > 0) {
-      close_depth(b_, za, zb, zc, p_.depth_closing_radius);
-      z_full = zc;
+      close_depth(b_, za, zb, za, p_.depth_closing_radius);  // in place: the erosion writes holes only
     }
     image_view<float> z = z_full;
     if (down) {
@@ -689,7 +686,7 @@ class segmenter {
   Backend b_;
   int pw_ = 0, ph_ = 0;
   buffer<unsigned char, Backend> raw_in_;
-  buffer<float, Backend> z_a_, z_b_, z_c_, z_proc_, z_smooth_;
+  buffer<float, Backend> z_a_, z_b_, z_proc_, z_smooth_;
   buffer<std::uint8_t, Backend> edges_, mask_, cov_l_, cov_r_, runs_;
   buffer<std::int32_t, Backend> parent_, count_, flags_, scan_, cand_;
   buffer<std::uint8_t, Backend> failed_;

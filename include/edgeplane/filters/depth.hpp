@@ -65,7 +65,9 @@ struct depth_dilate_kernel {
 
 /// Erosion half: an originally invalid pixel takes the smallest dilated depth of its window, or
 /// stays invalid when the window still holds an invalid pixel (the hole was wider than the filter).
-/// Valid pixels are never changed (the closing fills holes; it does not move depth edges).
+/// Valid pixels are never changed (the closing fills holes; it does not move depth edges).  `out`
+/// may be `original` itself: a pixel reads only its own original depth, and its window in
+/// `dilated`.
 struct depth_erode_kernel {
   image_view<const float> original;
   image_view<const float> dilated;
@@ -96,8 +98,9 @@ struct depth_erode_kernel {
     float* o = &out(x0, y);
     int holes = 0;
     for (int l = 0; l < Lanes; ++l) holes |= !(z[l] > 0.f);
-    if (!holes) {  // valid pixels are never changed
-      for (int l = 0; l < Lanes; ++l) o[l] = z[l];
+    if (!holes) {  // valid pixels are never changed (in place, nothing to write)
+      if (o != z)
+        for (int l = 0; l < Lanes; ++l) o[l] = z[l];
       return;
     }
     float m[Lanes];
