@@ -91,8 +91,27 @@ struct line_test {
     if (last < 1) return -1;
     int kl[lanes];
     float zl[lanes], most[lanes] = {};
+    // A block whose points all lie surely within their tolerance (num < l2 tol^2 (1 - 1e-4), with
+    // num = |(p - a) x (b - a)|^2 and l2 = |b - a|^2: then the excess, num / l2 and its square root
+    // rounded, is negative) cannot raise the largest excess above 0, and no point of it can be the
+    // worst: it is skipped without the division and square root.  (num and l2 are the very floats
+    // the exact path computes; the margin covers the rounding of the other five operations.)
+    // Degenerate chords (l2 = 0), tolerances whose square is not a normal float, huge bounds and
+    // NaN fail the test and take the exact path.
+    const point3 ab = b - a;
+    const float l2 = dot(ab, ab);
     for (int k = 1; k <= last; k += lanes) {
       gather(k, kl, zl);
+      unsigned doubt = 0;
+      for (int j = 0; j < lanes; ++j) {
+        const float z = zl[j];
+        const point3 ap = proj(x0 + kl[j] * Direction::dx, y0 + kl[j] * Direction::dy, z) - a;
+        const point3 c = cross(ap, ab);
+        const float tol = chord_tol + noise_k * sigma(z);
+        const float bound = l2 * (tol * tol);
+        doubt |= static_cast<unsigned>(!((tol >= 1e-15f) & (bound < 1e30f) & (dot(c, c) < bound * 0.9999f)));
+      }
+      if (!doubt) continue;
       for (int j = 0; j < lanes; ++j) {
         const float e = excess_at(kl[j], zl[j]);
         most[j] = e > most[j] ? e : most[j];
