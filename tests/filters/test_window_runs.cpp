@@ -66,7 +66,7 @@ TEST_CASE("window_runs: the closings' row kernels equal their per-pixel kernels"
     const auto lv = make_view<const std::uint16_t>(labels.data(), w, h);
     const auto ldv = make_view<const std::uint16_t>(ldil.data(), w, h);
     const auto mv = make_view<const std::uint8_t>(mask.data(), w, h);
-    for (const int r : {1, 2, 3, 8, 9}) {  // 8: the largest border tile (mask dilation); 9: border runs per pixel
+    for (const int r : {0, 1, 2, 3, 8, 9}) {  // 8: the largest border tile; 9: border runs per pixel
       CAPTURE(r);
       CHECK(differ<float>([&](image_view<float> o) { return detail::depth_dilate_kernel{zv, o, r}; }) == 0);
       CHECK(differ<float>([&](image_view<float> o) { return detail::depth_erode_kernel{zv, dv, o, r}; }) == 0);
@@ -74,9 +74,23 @@ TEST_CASE("window_runs: the closings' row kernels equal their per-pixel kernels"
             0);
       CHECK(differ<std::uint16_t>(
                 [&](image_view<std::uint16_t> o) { return detail::label_erode_kernel{lv, ldv, o, r}; }) == 0);
-      CHECK(differ<std::uint8_t>([&](image_view<std::uint8_t> o) { return detail::mask_dilate_kernel{mv, o, r}; }) ==
-            0);
-      CHECK(differ<std::uint8_t>([&](image_view<std::uint8_t> o) { return detail::mask_erode_kernel{mv, o, r}; }) == 0);
+      // the edge map's closing: host rows (detail::mask_rows_kernel) against the per-pixel kernels
+      for (const bool dilate : {true, false}) {
+        CAPTURE(dilate);
+        std::vector<std::uint8_t> a(mask.size(), 7), b(mask.size(), 9);
+        for (int y = 0; y < h; ++y)
+          for (int x = 0; x < w; ++x) {
+            if (dilate)
+              detail::mask_dilate_kernel{mv, make_view(a.data(), w, h), r}(x, y);
+            else
+              detail::mask_erode_kernel{mv, make_view(a.data(), w, h), r}(x, y);
+          }
+        if (dilate)
+          cpu{}.for_each_index(h, detail::mask_rows_kernel<true>{mv, make_view(b.data(), w, h), r});
+        else
+          cpu{}.for_each_index(h, detail::mask_rows_kernel<false>{mv, make_view(b.data(), w, h), r});
+        CHECK(a == b);
+      }
     }
   }
 }

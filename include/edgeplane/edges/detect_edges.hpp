@@ -641,22 +641,6 @@ struct mask_dilate_kernel {
         }
     out(x, y) = v;
   }
-  /// Host runs of Lanes pixels (see window_runs), c[0..Lanes-1] into o[0..Lanes-1] (rows pitch
-  /// bytes apart, their windows readable), 8 bytes per word (swar).  A zero tap (outside the
-  /// image, in window_runs' border copies) sets no bit, as operator() skips it.
-  static constexpr bool zero_padded = true;
-  template <int Lanes>
-  EDGEPLANE_HD EDGEPLANE_INLINE void lanes_from(const std::uint8_t* c, std::ptrdiff_t pitch, std::uint8_t* o) const {
-    static_assert(Lanes % 8 == 0, "runs of whole 8-byte words");
-    constexpr int words = Lanes / 8;
-    std::uint64_t v[words] = {};
-    for (int dy = -r; dy <= r; ++dy) {
-      const std::uint8_t* row = c + dy * pitch - r;
-      for (int j = 0; j <= 2 * r; ++j)
-        for (int k = 0; k < words; ++k) v[k] |= swar::load(row + j + 8 * k);
-    }
-    for (int k = 0; k < words; ++k) swar::store(o + 8 * k, swar::nonzero_bytes(v[k]));
-  }
 };
 
 /// Binary erosion: set only where the whole window is set (pixels outside the image count as set,
@@ -679,26 +663,39 @@ struct mask_erode_kernel {
         }
     out(x, y) = v;
   }
-  template <int Lanes>  // see window_runs; the centre is in the window; 8 bytes per word (swar)
-  EDGEPLANE_HD EDGEPLANE_INLINE void lanes(int x0, int y) const {
-    static_assert(Lanes % 8 == 0, "runs of whole 8-byte words");
-    constexpr int words = Lanes / 8;
-    std::uint64_t v[words];  // 1 per byte while the window is all set so far
-    const std::uint8_t* c = &in(x0, y);
-    std::uint64_t any = 0;
-    for (int k = 0; k < words; ++k) {
-      v[k] = swar::nonzero_bytes(swar::load(c + 8 * k));
-      any |= v[k];
-    }
-    std::uint8_t* o = &out(x0, y);
-    if (any) {  // else no pixel is set: nothing to erode, all 0
-      for (int dy = -r; dy <= r; ++dy) {
-        const std::uint8_t* row = &in(x0 - r, y + dy);
-        for (int j = 0; j <= 2 * r; ++j)
-          for (int k = 0; k < words; ++k) v[k] &= swar::nonzero_bytes(swar::load(row + j + 8 * k));
+};
+
+/// Host form of the edge map's closing, one work item per row: the output row accumulates the
+/// window one shift at a time, each a pass over the row (64 bytes per AVX-512 instruction).
+/// Rows and columns outside the image are skipped, as the per-pixel kernels skip them: the
+/// dilation ORs in the taps (then 1 where any is set), the erosion ANDs them with the centre.
+template <bool Dilate>
+struct mask_rows_kernel {
+  image_view<const std::uint8_t> in;
+  image_view<std::uint8_t> out;
+  int r;
+  EDGEPLANE_HOST_CLONES void operator()(std::int64_t row) const {
+    const int y = static_cast<int>(row), w = in.width, h = in.height;
+    std::uint8_t* o = &out(0, y);
+    const std::uint8_t* c = &in(0, y);
+    if constexpr (Dilate)
+      for (int x = 0; x < w; ++x) o[x] = 0;
+    else
+      for (int x = 0; x < w; ++x) o[x] = c[x] != 0;
+    for (int dy = -r; dy <= r; ++dy) {
+      const int v = y + dy;
+      if (v < 0 || v >= h) continue;
+      const std::uint8_t* t = &in(0, v);
+      for (int dx = -r; dx <= r; ++dx) {
+        const int x0 = dx < 0 ? -dx : 0, x1 = dx > 0 ? w - dx : w;  // x + dx inside the row
+        if constexpr (Dilate)
+          for (int x = x0; x < x1; ++x) o[x] = static_cast<std::uint8_t>(o[x] | t[x + dx]);
+        else
+          for (int x = x0; x < x1; ++x) o[x] = static_cast<std::uint8_t>(o[x] & (t[x + dx] != 0));
       }
     }
-    for (int k = 0; k < words; ++k) swar::store(o + 8 * k, v[k]);
+    if constexpr (Dilate)
+      for (int x = 0; x < w; ++x) o[x] = o[x] != 0;
   }
 };
 
@@ -784,10 +781,13 @@ void close_edges(const Backend& b, image_view<const std::uint8_t> edges, image_v
                  image_view<std::uint8_t> mask, int r) {
   detail::check_same_size(edges, mask, "edges", "mask");
   detail::check_same_size(edges, scratch, "edges", "scratch");
-  detail::for_each_pixel_run<detail::window_runs<detail::mask_dilate_kernel>::template plain_kernel>(
-      b, edges.width, edges.height, detail::mask_dilate_kernel{edges, scratch, r});
-  detail::for_each_pixel_run<detail::window_runs<detail::mask_erode_kernel>::template plain_kernel>(
-      b, edges.width, edges.height, detail::mask_erode_kernel{scratch, mask, r});
+  if constexpr (detail::row_lanes<Backend> > 1) {
+    b.for_each_index(edges.height, detail::mask_rows_kernel<true>{edges, scratch, r});
+    b.for_each_index(edges.height, detail::mask_rows_kernel<false>{scratch, mask, r});
+  } else {
+    detail::for_each_pixel(b, edges.width, edges.height, detail::mask_dilate_kernel{edges, scratch, r});
+    detail::for_each_pixel(b, edges.width, edges.height, detail::mask_erode_kernel{scratch, mask, r});
+  }
 }
 
 }  // namespace edgeplane
