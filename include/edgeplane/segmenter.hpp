@@ -608,12 +608,16 @@ class segmenter {
       }
     }
     if (p_.label_closing_radius > 0 && num_planes > 0) {
-      detail::for_each_pixel_run<detail::window_runs<detail::label_dilate_kernel>::template plain_kernel>(
-          b_, pw_, ph_, detail::label_dilate_kernel{la, lb, p_.label_closing_radius});
       lab_c_.resize(n);
       auto lc = view(lab_c_.data(), pw_, ph_);
-      detail::for_each_pixel_run<detail::window_runs<detail::label_erode_kernel>::template plain_kernel>(
-          b_, pw_, ph_, detail::label_erode_kernel{la, lb, lc, p_.label_closing_radius});
+      const int r = p_.label_closing_radius;
+      if constexpr (detail::row_lanes<Backend> > 1) {  // host: by rows
+        b_.for_each_index(ph_, detail::label_rows_kernel<true>{la, la, lb, r});
+        b_.for_each_index(ph_, detail::label_rows_kernel<false>{la, lb, lc, r});
+      } else {
+        detail::for_each_pixel(b_, pw_, ph_, detail::label_dilate_kernel{la, lb, r});
+        detail::for_each_pixel(b_, pw_, ph_, detail::label_erode_kernel{la, lb, lc, r});
+      }
       std::swap(la, lc);
     }
     // Disconnected regions of one plane (a floor seen on both sides of a table, coplanar box

@@ -2,12 +2,10 @@
 // unlabelled pixels, the final closing, and nearest-neighbour upsampling.
 #pragma once
 #include <cstdint>
-#include <cstring>
 
 #include "edgeplane/backend/atomic.hpp"
 #include "edgeplane/config.hpp"
 #include "edgeplane/detail/geometry.hpp"
-#include "edgeplane/detail/swar.hpp"
 #include "edgeplane/image.hpp"
 #include "edgeplane/labels/union_find.hpp"
 
@@ -212,40 +210,6 @@ struct label_dilate_kernel {
     }
     out(x, y) = v;
   }
-  template <int Lanes>  // see window_runs
-  EDGEPLANE_HD EDGEPLANE_INLINE void lanes(int x0, int y) const {
-    static_assert(Lanes % 4 == 0, "runs of whole 64-bit words");
-    const std::uint16_t* c = &in(x0, y);
-    std::uint16_t* o = &out(x0, y);
-    std::uint64_t gaps = 0;  // 4 labels per word (swar)
-    for (int l = 0; l < Lanes; l += 4) gaps |= ~swar::nonzero_lanes16(swar::load(c + l));
-    std::uint64_t any = 0;  // a label anywhere in the windows (else the gaps stay 0)
-    if (gaps) {
-      const int span = 2 * r + Lanes;  // the windows' columns, x0 - r .. x0 + Lanes - 1 + r
-      for (int dy = -r; dy <= r; ++dy) {
-        const std::uint16_t* row = &in(x0 - r, y + dy);
-        for (int j = 0; j + 4 <= span; j += 4) any |= swar::load(row + j);
-        any |= swar::load(row + span - 4);
-      }
-    }
-    if (!any) {  // no gap, or nothing to fill one with: every pixel keeps its label (or its 0)
-      std::memcpy(o, c, sizeof(std::uint16_t) * Lanes);
-      return;
-    }
-    // label - 1 wraps 0 to 0xffff, so the unsigned minimum of (label - 1) + 1 is the smallest
-    // nonzero label, or 0 where the window has none
-    std::uint16_t m[Lanes];
-    for (int l = 0; l < Lanes; ++l) m[l] = 0xffff;
-    for (int dy = -r; dy <= r; ++dy) {
-      const std::uint16_t* row = &in(x0 - r, y + dy);
-      for (int j = 0; j <= 2 * r; ++j)
-        for (int l = 0; l < Lanes; ++l) {
-          const std::uint16_t v = static_cast<std::uint16_t>(row[j + l] - 1);
-          m[l] = v < m[l] ? v : m[l];
-        }
-    }
-    for (int l = 0; l < Lanes; ++l) o[l] = c[l] != 0 ? c[l] : static_cast<std::uint16_t>(m[l] + 1);
-  }
 };
 
 /// Label closing, erosion half: a pixel filled by the dilation keeps its label only if every
@@ -270,28 +234,47 @@ struct label_erode_kernel {
         }
     out(x, y) = v;
   }
-  template <int Lanes>  // see window_runs
-  EDGEPLANE_HD EDGEPLANE_INLINE void lanes(int x0, int y) const {
-    static_assert(Lanes % 4 == 0, "runs of whole 64-bit words");
-    constexpr int words = Lanes / 4;  // 4 labels per word (swar)
-    const std::uint16_t* o0 = &original(x0, y);
-    const std::uint16_t* d = &dilated(x0, y);
-    std::uint16_t* o = &out(x0, y);
-    // orig: the original labels, kept; fill: the dilated label where the original has none, kept
-    // where the lane's whole window is labelled in the dilated image
-    std::uint64_t orig[words], fill[words], any = 0;
-    for (int k = 0; k < words; ++k) {
-      orig[k] = swar::load(o0 + 4 * k);
-      fill[k] = swar::load(d + 4 * k) & ~swar::nonzero_lanes16(orig[k]);
-      any |= fill[k];
-    }
-    if (any)
-      for (int dy = -r; dy <= r; ++dy) {
-        const std::uint16_t* row = &dilated(x0 - r, y + dy);
-        for (int j = 0; j <= 2 * r; ++j)
-          for (int k = 0; k < words; ++k) fill[k] &= swar::nonzero_lanes16(swar::load(row + j + 4 * k));
+};
+
+/// Host form of the label closing, one work item per row: the output row accumulates the window
+/// one shift at a time, each a pass over the row (vectorizable); taps outside the image are
+/// skipped, as the per-pixel kernels skip them.  Dilation: the smallest nonzero label of the
+/// window where the pixel has none (label - 1 wraps 0 to 0xffff, so the unsigned minimum of
+/// label - 1, plus 1, is that label, or 0).  Erosion: a filled pixel keeps its dilated label only
+/// where the whole window is labelled in the dilated image; original labels are kept.
+template <bool Dilate>
+struct label_rows_kernel {
+  image_view<const std::uint16_t> original;  // the labels before the closing
+  image_view<const std::uint16_t> dilated;   // the dilation's output (erosion only)
+  image_view<std::uint16_t> out;
+  int r;
+  EDGEPLANE_HOST_CLONES void operator()(std::int64_t row) const {
+    const int y = static_cast<int>(row), w = original.width, h = original.height;
+    const image_view<const std::uint16_t> taps = Dilate ? original : dilated;
+    std::uint16_t* o = &out(0, y);  // the accumulator: the minimum of label - 1 / all taps set
+    for (int x = 0; x < w; ++x) o[x] = 0xffff;
+    for (int dy = -r; dy <= r; ++dy) {
+      const int v = y + dy;
+      if (v < 0 || v >= h) continue;
+      const std::uint16_t* t = &taps(0, v);
+      for (int dx = -r; dx <= r; ++dx) {
+        const int x0 = dx < 0 ? -dx : 0, x1 = dx > 0 ? w - dx : w;  // x + dx inside the row
+        if constexpr (Dilate)
+          for (int x = x0; x < x1; ++x) {
+            const std::uint16_t l = static_cast<std::uint16_t>(t[x + dx] - 1);
+            o[x] = l < o[x] ? l : o[x];
+          }
+        else
+          for (int x = x0; x < x1; ++x) o[x] = static_cast<std::uint16_t>(o[x] & (t[x + dx] != 0 ? 0xffff : 0));
       }
-    for (int k = 0; k < words; ++k) swar::store(o + 4 * k, orig[k] | fill[k]);
+    }
+    const std::uint16_t* c = &original(0, y);
+    if constexpr (Dilate) {
+      for (int x = 0; x < w; ++x) o[x] = c[x] != 0 ? c[x] : static_cast<std::uint16_t>(o[x] + 1);
+    } else {
+      const std::uint16_t* d = &dilated(0, y);
+      for (int x = 0; x < w; ++x) o[x] = c[x] != 0 ? c[x] : static_cast<std::uint16_t>(d[x] & o[x]);
+    }
   }
 };
 
