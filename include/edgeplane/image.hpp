@@ -56,5 +56,17 @@ void check_same_size(const image_view<A>& a, const image_view<B>& b, const char*
           std::string(an) + " is " + std::to_string(a.width) + "x" + std::to_string(a.height) + " but " + bn + " is " +
               std::to_string(b.width) + "x" + std::to_string(b.height));
 }
+/// The shifts of a (2r+1)^2 window at row y of an image (host row kernels of the closings): calls
+/// f(row, dx, x0, x1) for every dy whose row y + dy lies inside the image (row: its first
+/// element) and every dx, with [x0, x1) the x for which x + dx lies inside the row.  Taps outside
+/// the image are skipped, as the per-pixel closings skip them.
+template <class T, class F>
+inline void for_each_window_shift(const image_view<T>& img, int y, int r, F&& f) {
+  for (int dy = -r; dy <= r; ++dy) {
+    const int v = y + dy;
+    if (v < 0 || v >= img.height) continue;
+    for (int dx = -r; dx <= r; ++dx) f(&img(0, v), dx, dx < 0 ? -dx : 0, dx > 0 ? img.width - dx : img.width);
+  }
+}
 }  // namespace detail
 }  // namespace edgeplane

@@ -675,25 +675,19 @@ struct mask_rows_kernel {
   image_view<std::uint8_t> out;
   int r;
   EDGEPLANE_HOST_CLONES void operator()(std::int64_t row) const {
-    const int y = static_cast<int>(row), w = in.width, h = in.height;
+    const int y = static_cast<int>(row), w = in.width;
     std::uint8_t* o = &out(0, y);
     const std::uint8_t* c = &in(0, y);
     if constexpr (Dilate)
       for (int x = 0; x < w; ++x) o[x] = 0;
     else
       for (int x = 0; x < w; ++x) o[x] = c[x] != 0;
-    for (int dy = -r; dy <= r; ++dy) {
-      const int v = y + dy;
-      if (v < 0 || v >= h) continue;
-      const std::uint8_t* t = &in(0, v);
-      for (int dx = -r; dx <= r; ++dx) {
-        const int x0 = dx < 0 ? -dx : 0, x1 = dx > 0 ? w - dx : w;  // x + dx inside the row
-        if constexpr (Dilate)
-          for (int x = x0; x < x1; ++x) o[x] = static_cast<std::uint8_t>(o[x] | t[x + dx]);
-        else
-          for (int x = x0; x < x1; ++x) o[x] = static_cast<std::uint8_t>(o[x] & (t[x + dx] != 0));
-      }
-    }
+    for_each_window_shift(in, y, r, [&](const std::uint8_t* t, int dx, int x0, int x1) {
+      if constexpr (Dilate)
+        for (int x = x0; x < x1; ++x) o[x] = static_cast<std::uint8_t>(o[x] | t[x + dx]);
+      else
+        for (int x = x0; x < x1; ++x) o[x] = static_cast<std::uint8_t>(o[x] & (t[x + dx] != 0));
+    });
     if constexpr (Dilate)
       for (int x = 0; x < w; ++x) o[x] = o[x] != 0;
   }

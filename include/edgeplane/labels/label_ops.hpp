@@ -249,25 +249,19 @@ struct label_rows_kernel {
   image_view<std::uint16_t> out;
   int r;
   EDGEPLANE_HOST_CLONES void operator()(std::int64_t row) const {
-    const int y = static_cast<int>(row), w = original.width, h = original.height;
+    const int y = static_cast<int>(row), w = original.width;
     const image_view<const std::uint16_t> taps = Dilate ? original : dilated;
     std::uint16_t* o = &out(0, y);  // the accumulator: the minimum of label - 1 / all taps set
     for (int x = 0; x < w; ++x) o[x] = 0xffff;
-    for (int dy = -r; dy <= r; ++dy) {
-      const int v = y + dy;
-      if (v < 0 || v >= h) continue;
-      const std::uint16_t* t = &taps(0, v);
-      for (int dx = -r; dx <= r; ++dx) {
-        const int x0 = dx < 0 ? -dx : 0, x1 = dx > 0 ? w - dx : w;  // x + dx inside the row
-        if constexpr (Dilate)
-          for (int x = x0; x < x1; ++x) {
-            const std::uint16_t l = static_cast<std::uint16_t>(t[x + dx] - 1);
-            o[x] = l < o[x] ? l : o[x];
-          }
-        else
-          for (int x = x0; x < x1; ++x) o[x] = static_cast<std::uint16_t>(o[x] & (t[x + dx] != 0 ? 0xffff : 0));
-      }
-    }
+    for_each_window_shift(taps, y, r, [&](const std::uint16_t* t, int dx, int x0, int x1) {
+      if constexpr (Dilate)
+        for (int x = x0; x < x1; ++x) {
+          const std::uint16_t l = static_cast<std::uint16_t>(t[x + dx] - 1);
+          o[x] = l < o[x] ? l : o[x];
+        }
+      else
+        for (int x = x0; x < x1; ++x) o[x] = static_cast<std::uint16_t>(o[x] & (t[x + dx] != 0 ? 0xffff : 0));
+    });
     const std::uint16_t* c = &original(0, y);
     if constexpr (Dilate) {
       for (int x = 0; x < w; ++x) o[x] = c[x] != 0 ? c[x] : static_cast<std::uint16_t>(o[x] + 1);
