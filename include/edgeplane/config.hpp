@@ -96,21 +96,13 @@ void for_each_pixel_run(const Backend& b, int w, int h, const Pixel& px) {
   }
 }
 
-/// Host row kernels of windowed pixel kernels (smoothing, closings): px.lanes<Lanes>(x0, y) computes pixels
-/// x0 .. x0 + Lanes - 1 of row y at once where all their (2 px.r + 1)^2 windows lie inside the
-/// image (px.out's size), and must give exactly what px(x, y) gives; px(x, y) runs elsewhere.
-/// Use as for_each_pixel_run<window_runs<Px>::template kernel> (compiled as EDGEPLANE_HOST_CLONES)
-/// or window_runs<Px>::template plain_kernel (compiled once: for kernels that wider vectors make
-/// slower, as the byte closings of the edge map measured).
-/// A pixel kernel may instead offer px.lanes_from<Lanes>(c, pitch, o): the run whose first pixel
-/// is c (rows pitch elements apart, windows readable) into o, with zero_padded = true when a zero
-/// outside the image is what px(x, y) skips (a window tap that changes nothing).  window_runs then
-/// also runs the border runs (inside a row) as lanes, on a copy of their window with zeros outside
-/// the image (for px.r up to max_tile_r).
-template <class Px, class = void>
-inline constexpr bool zero_padded = false;
-template <class Px>
-inline constexpr bool zero_padded<Px, std::enable_if_t<Px::zero_padded>> = true;
+/// Host row kernels of a windowed pixel kernel (the smoothing): px.lanes_from<Lanes>(c, pitch, o)
+/// computes the run of Lanes pixels whose first pixel is c (rows pitch elements apart, windows
+/// readable) into o, and must give exactly what px(x, y) gives, treating a zero tap as one that
+/// px(x, y) skips (outside the image: a tap that changes nothing).  Runs whose windows lie inside
+/// the image read it in place; border runs (inside a row) read a copy of their window with zeros
+/// outside the image (for px.r up to max_tile_r); the rest run px(x, y) per pixel.  Use as
+/// for_each_pixel_run<window_runs<Px>::template kernel>.
 inline constexpr int max_tile_r = 8;
 
 template <class Px>
@@ -120,41 +112,31 @@ struct window_runs {
     const int y = static_cast<int>(item / chunks), x0 = static_cast<int>(item % chunks) * Lanes;
     const int w = px.out.width, h = px.out.height, r = px.r;
     if (x0 < r || x0 + Lanes > w - r || y < r || y >= h - r) {
-      if constexpr (zero_padded<Px>)
-        if (x0 + Lanes <= w && r <= max_tile_r) {  // rows y - r .. y + r, columns x0 - r .. x0 + Lanes - 1 + r
-          using T = std::remove_cv_t<std::remove_reference_t<decltype(px.in(0, 0))>>;
-          constexpr int tp = Lanes + 2 * max_tile_r;
-          T tile[(2 * max_tile_r + 1) * tp];
-          for (int dy = -r; dy <= r; ++dy) {
-            const int v = y + dy;
-            for (int j = 0; j < Lanes + 2 * r; ++j) {
-              const int u = x0 - r + j;
-              tile[(dy + r) * tp + j] = (v >= 0 && v < px.in.height && u >= 0 && u < px.in.width) ? px.in(u, v) : T{};
-            }
+      if (x0 + Lanes <= w && r <= max_tile_r) {  // rows y - r .. y + r, columns x0 - r .. x0 + Lanes - 1 + r
+        using T = std::remove_cv_t<std::remove_reference_t<decltype(px.in(0, 0))>>;
+        constexpr int tp = Lanes + 2 * max_tile_r;
+        T tile[(2 * max_tile_r + 1) * tp];
+        for (int dy = -r; dy <= r; ++dy) {
+          const int v = y + dy;
+          for (int j = 0; j < Lanes + 2 * r; ++j) {
+            const int u = x0 - r + j;
+            tile[(dy + r) * tp + j] = (v >= 0 && v < px.in.height && u >= 0 && u < px.in.width) ? px.in(u, v) : T{};
           }
-          px.template lanes_from<Lanes>(tile + r * tp + r, tp, &px.out(x0, y));
-          return;
         }
+        px.template lanes_from<Lanes>(tile + r * tp + r, tp, &px.out(x0, y));
+        return;
+      }
       const int x1 = x0 + Lanes < w ? x0 + Lanes : w;
       for (int x = x0; x < x1; ++x) px(x, y);
       return;
     }
-    if constexpr (zero_padded<Px>)
-      px.template lanes_from<Lanes>(&px.in(x0, y), px.in.pitch, &px.out(x0, y));
-    else
-      px.template lanes<Lanes>(x0, y);
+    px.template lanes_from<Lanes>(&px.in(x0, y), px.in.pitch, &px.out(x0, y));
   }
   template <int Lanes>
   struct kernel {
     Px px;
     int chunks;
     EDGEPLANE_HOST_CLONES EDGEPLANE_HD void operator()(std::int64_t item) const { run<Lanes>(px, chunks, item); }
-  };
-  template <int Lanes>
-  struct plain_kernel {
-    Px px;
-    int chunks;
-    EDGEPLANE_HD void operator()(std::int64_t item) const { run<Lanes>(px, chunks, item); }
   };
 };
 }  // namespace edgeplane::detail

@@ -41,26 +41,6 @@ struct depth_dilate_kernel {
     }
     out(x, y) = m;
   }
-  template <int Lanes>  // see window_runs: the same maximum, in the same order
-  EDGEPLANE_HD EDGEPLANE_INLINE void lanes(int x0, int y) const {
-    float c[Lanes], m[Lanes];
-    int holes = 0;
-    for (int l = 0; l < Lanes; ++l) {
-      c[l] = m[l] = in(x0 + l, y);
-      holes |= c[l] <= 0.f;
-    }
-    float* o = &out(x0, y);
-    if (!holes) {  // valid pixels keep their depth
-      for (int l = 0; l < Lanes; ++l) o[l] = c[l];
-      return;
-    }
-    for (int dy = -r; dy <= r; ++dy) {
-      const float* row = &in(x0 - r, y + dy);
-      for (int j = 0; j <= 2 * r; ++j)
-        for (int l = 0; l < Lanes; ++l) m[l] = row[j + l] > m[l] ? row[j + l] : m[l];
-    }
-    for (int l = 0; l < Lanes; ++l) o[l] = c[l] <= 0.f ? m[l] : c[l];
-  }
 };
 
 /// Erosion half: an originally invalid pixel takes the smallest dilated depth of its window, or
@@ -92,33 +72,51 @@ struct depth_erode_kernel {
         }
     out(x, y) = m;
   }
-  template <int Lanes>  // see window_runs: the same minimum, in the same order
-  EDGEPLANE_HD EDGEPLANE_INLINE void lanes(int x0, int y) const {
-    const float* z = &original(x0, y);
-    float* o = &out(x0, y);
-    int holes = 0;
-    for (int l = 0; l < Lanes; ++l) holes |= !(z[l] > 0.f);
-    if (!holes) {  // valid pixels are never changed (in place, nothing to write)
-      if (o != z)
-        for (int l = 0; l < Lanes; ++l) o[l] = z[l];
-      return;
-    }
-    float m[Lanes];
-    int hole[Lanes];  // the window holds an invalid dilated pixel
-    for (int l = 0; l < Lanes; ++l) {
-      m[l] = 3.4e38f;
-      hole[l] = 0;
-    }
-    for (int dy = -r; dy <= r; ++dy) {
-      const float* row = &dilated(x0 - r, y + dy);
-      for (int j = 0; j <= 2 * r; ++j)
-        for (int l = 0; l < Lanes; ++l) {
-          const float v = row[j + l];
-          hole[l] |= v <= 0.f;
-          m[l] = v < m[l] ? v : m[l];
+};
+
+/// Host form of the closing's halves, one work item per row: chunks of the row accumulate the
+/// window one shift at a time, each a pass over the chunk (vectorizable), taps outside the image
+/// skipped as the per-pixel kernels skip them.  Dilation: the largest tap, kept where the pixel
+/// is invalid.  Erosion: the smallest dilated tap where the pixel was invalid, 0 where that is
+/// <= 0 (the window held an invalid pixel: depth is never negative), the original depth
+/// elsewhere.  Either order of a maximum or minimum of finite non-negative depths gives the same
+/// float.  `out` may be `in` (erosion: a row reads only its own original depth).
+template <bool Dilate>
+struct depth_rows_kernel {
+  image_view<const float> in;       // the depth before the closing
+  image_view<const float> dilated;  // the dilation's output (erosion only)
+  image_view<float> out;
+  int r;
+  EDGEPLANE_HOST_CLONES void operator()(std::int64_t row) const {
+    const int y = static_cast<int>(row), w = in.width;
+    const image_view<const float> taps = Dilate ? in : dilated;
+    const float* c = &in(0, y);
+    float* o = &out(0, y);
+    constexpr int chunk = 256;
+    float m[chunk];
+    for (int xa = 0; xa < w; xa += chunk) {
+      const int xb = xa + chunk < w ? xa + chunk : w;
+      for (int x = xa; x < xb; ++x) m[x - xa] = Dilate ? c[x] : 3.4e38f;
+      for_each_window_shift(taps, y, r, [&](const float* t, int dx, int x0, int x1) {
+        const int lo = x0 > xa ? x0 : xa, hi = x1 < xb ? x1 : xb;
+        for (int x = lo; x < hi; ++x) {
+          const float v = t[x + dx];
+          if constexpr (Dilate)
+            m[x - xa] = v > m[x - xa] ? v : m[x - xa];
+          else
+            m[x - xa] = v < m[x - xa] ? v : m[x - xa];
         }
+      });
+      if (Dilate || o != c) {
+        for (int x = xa; x < xb; ++x) {
+          const float z = c[x], v = m[x - xa];
+          o[x] = z > 0.f ? z : (Dilate ? v : (v > 0.f ? v : 0.f));
+        }
+      } else {  // in place: only the holes are written (a valid pixel's line stays clean)
+        for (int x = xa; x < xb; ++x)
+          if (!(c[x] > 0.f)) o[x] = m[x - xa] > 0.f ? m[x - xa] : 0.f;
+      }
     }
-    for (int l = 0; l < Lanes; ++l) o[l] = z[l] > 0.f ? z[l] : (hole[l] ? 0.f : m[l]);
   }
 };
 
@@ -194,7 +192,6 @@ struct smooth_kernel {
   /// lane's sum in the same order as above (bit-identical), which breaks the one-add-after-another
   /// chain of a single pixel and lets the compiler use SIMD.  A zero tap (outside the image, in
   /// window_runs' border copies) adds +0 and no count, as operator() skips it.
-  static constexpr bool zero_padded = true;
   template <int Lanes>
   EDGEPLANE_HD EDGEPLANE_INLINE void lanes_from(const float* c, std::ptrdiff_t pitch, float* o) const {
     float zc[Lanes], tol[Lanes], sum[Lanes], cnt[Lanes];  // counts as floats: exact, and one vector type
@@ -251,10 +248,13 @@ template <class Backend>
 void close_depth(const Backend& b, image_view<float> depth, image_view<float> scratch, image_view<float> out, int r) {
   detail::check_same_size(depth, scratch, "depth", "scratch");
   detail::check_same_size(depth, out, "depth", "output");
-  detail::for_each_pixel_run<detail::window_runs<detail::depth_dilate_kernel>::template kernel>(
-      b, depth.width, depth.height, detail::depth_dilate_kernel{depth, scratch, r});
-  detail::for_each_pixel_run<detail::window_runs<detail::depth_erode_kernel>::template kernel>(
-      b, depth.width, depth.height, detail::depth_erode_kernel{depth, scratch, out, r});
+  if constexpr (detail::row_lanes<Backend> > 1) {  // host: by rows
+    b.for_each_index(depth.height, detail::depth_rows_kernel<true>{depth, depth, scratch, r});
+    b.for_each_index(depth.height, detail::depth_rows_kernel<false>{depth, scratch, out, r});
+  } else {
+    detail::for_each_pixel(b, depth.width, depth.height, detail::depth_dilate_kernel{depth, scratch, r});
+    detail::for_each_pixel(b, depth.width, depth.height, detail::depth_erode_kernel{depth, scratch, out, r});
+  }
 }
 
 /// 2x downscale of a working depth image into out (width/2 x height/2).
