@@ -306,7 +306,7 @@ TEST_CASE("valid_runs kernels count each pixel's valid neighbours on all eight s
     std::vector<std::uint8_t> runs(static_cast<std::size_t>(8) * w * h, 0xab), valid(static_cast<std::size_t>(w) * h, 0x5a);
     const cpu b{};
     b.for_each_index(h, detail::valid_runs_rows_kernel{zv, runs.data(), r, valid.data()});
-    b.for_each_index((h + 31) / 32, detail::valid_runs_bands_kernel{zv, runs.data(), r, 32, valid.data()});
+    b.for_each_index(6 * ((h + 31) / 32), detail::valid_runs_bands_kernel{zv, runs.data(), r, 32, valid.data()});
     int wrong_valid = 0;
     for (int i = 0; i < w * h; ++i)
       wrong_valid += valid[static_cast<std::size_t>(i)] != (z[static_cast<std::size_t>(i)] > 0.f ? 0xff : 0);

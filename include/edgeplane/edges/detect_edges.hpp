@@ -250,16 +250,21 @@ struct valid_runs_bands_kernel {
       }
     }
   }
+  /// Work item 6 b + q: plane q of the six (vertical left, right, left diagonal left, right,
+  /// right diagonal left, right) over band b, so that even a short image has enough items for
+  /// both cores (the CPU backend runs fewer than 64 items serially).
   EDGEPLANE_HOST_CLONES EDGEPLANE_HD void operator()(std::int64_t item) const {
-    const int y0 = static_cast<int>(item) * band;
+    const int y0 = static_cast<int>(item / 6) * band, q = static_cast<int>(item % 6);
     const int y1 = y0 + band < depth.height ? y0 + band : depth.height;
     const std::int64_t n = static_cast<std::int64_t>(depth.width) * depth.height;
-    plane<0>(runs + 2 * n, y0, y1, -1);
-    plane<0>(runs + 3 * n, y0, y1, +1);
-    plane<1>(runs + 4 * n, y0, y1, -1);
-    plane<1>(runs + 5 * n, y0, y1, +1);
-    plane<-1>(runs + 6 * n, y0, y1, -1);
-    plane<-1>(runs + 7 * n, y0, y1, +1);
+    std::uint8_t* out = runs + (2 + q) * n;
+    const int side = q % 2 == 0 ? -1 : +1;
+    if (q < 2)
+      plane<0>(out, y0, y1, side);
+    else if (q < 4)
+      plane<1>(out, y0, y1, side);
+    else
+      plane<-1>(out, y0, y1, side);
   }
 };
 
@@ -757,7 +762,7 @@ void detect_edges(const Backend& b, image_view<const float> depth, const intrins
     float* points = reinterpret_cast<float*>(scratch + at.points);
     constexpr int band = 32;
     b.for_each_index(h, detail::valid_runs_rows_kernel{depth, runs, reach, valid, px.proj, points});
-    b.for_each_index((h + band - 1) / band, detail::valid_runs_bands_kernel{depth, runs, reach, band, valid});
+    b.for_each_index(6 * ((h + band - 1) / band), detail::valid_runs_bands_kernel{depth, runs, reach, band, valid});
     px.runs = runs;
     px.points = points;
   } else {
