@@ -330,3 +330,15 @@ TEST_CASE("valid_runs kernels count each pixel's valid neighbours on all eight s
     CHECK(full > 0);  // not all counts cut short
   }
 }
+
+TEST_CASE("detect_edges: arms longer than 32 neighbours are refused with a clear error") {
+  const int w = 40, h = 30;
+  std::vector<float> z(static_cast<std::size_t>(w) * h, 1.5f);
+  std::vector<std::uint8_t> e(z.size(), 0);
+  params p = presets::thesis_full();
+  p.n_coe = 33;
+  CHECK_THROWS_AS(detect_edges(cpu{}, make_view<const float>(z.data(), w, h), camera(w, h), p, make_view(e.data(), w, h)),
+                  edgeplane::error);
+  p.n_coe = 32;  // the largest validate() allows still runs
+  CHECK_NOTHROW(detect_edges(cpu{}, make_view<const float>(z.data(), w, h), camera(w, h), p, make_view(e.data(), w, h)));
+}

@@ -746,6 +746,9 @@ void detect_edges(const Backend& b, image_view<const float> depth, const intrins
   detail::check_same_size(depth, edges, "depth", "edges");
   const detail::edge_set set = detail::make_edge_set(p);
   const int reach = set.reach();
+  detail::require(reach >= 1 && reach <= 32,
+                  "detect_edges: the edge tests' arms (n_ee, n_coe, n_cue) must reach 1 to 32 neighbours, got " +
+                      std::to_string(reach));
   const int w = depth.width, h = depth.height;
   if (w <= 0 || h <= 0) return;
   detail::all_edges_kernel px{depth, edges, detail::make_projector(k), set, reach};
