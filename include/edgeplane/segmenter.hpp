@@ -610,14 +610,7 @@ class segmenter {
     if (p_.label_closing_radius > 0 && num_planes > 0) {
       lab_c_.resize(n);
       auto lc = view(lab_c_.data(), pw_, ph_);
-      const int r = p_.label_closing_radius;
-      if constexpr (detail::row_lanes<Backend> > 1) {  // host: by rows
-        b_.for_each_index(ph_, detail::label_rows_kernel<true>{la, la, lb, r});
-        b_.for_each_index(ph_, detail::label_rows_kernel<false>{la, lb, lc, r});
-      } else {
-        detail::for_each_pixel(b_, pw_, ph_, detail::label_dilate_kernel{la, lb, r});
-        detail::for_each_pixel(b_, pw_, ph_, detail::label_erode_kernel{la, lb, lc, r});
-      }
+      close_labels(b_, image_view<const std::uint16_t>(la), lb, lc, p_.label_closing_radius);
       std::swap(la, lc);
     }
     // Disconnected regions of one plane (a floor seen on both sides of a table, coplanar box

@@ -43,10 +43,9 @@ std::vector<std::uint16_t> grow_once(const B& b, const std::vector<float>& depth
 }
 
 template <class B>
-std::vector<std::uint16_t> close_labels(const B& b, const std::vector<std::uint16_t>& in, int w, int h, int r) {
+std::vector<std::uint16_t> closed(const B& b, const std::vector<std::uint16_t>& in, int w, int h, int r) {
   device_array<std::uint16_t, B> li(b, in), dil(b, in.size(), 0), out(b, in.size(), 0xBEEF);
-  detail::for_each_pixel(b, w, h, detail::label_dilate_kernel{li.cview(w, h), dil.view(w, h), r});
-  detail::for_each_pixel(b, w, h, detail::label_erode_kernel{li.cview(w, h), dil.cview(w, h), out.view(w, h), r});
+  close_labels(b, li.cview(w, h), dil.view(w, h), out.view(w, h), r);
   return out.host();
 }
 
@@ -229,7 +228,7 @@ TEST_CASE_TEMPLATE("label closing (r = 1) fills 1-pixel and 2x2 holes, not a 5x5
   for (auto [x, y] : kept) in[at(w, x, y)] = 0;
   for (const B& b : variants<B>()) {
     CAPTURE(variant_name(b));
-    const auto out = close_labels(b, in, w, h, 1);
+    const auto out = closed(b, in, w, h, 1);
     for (int y = 0; y < h; ++y)
       for (int x = 0; x < w; ++x) {
         CAPTURE(x);
@@ -250,7 +249,7 @@ TEST_CASE_TEMPLATE("label closing: a hole on the border of two labels takes the 
   in[at(w, 5, 3)] = 0;
   in[at(w, 4, 1)] = 0;
   const B b{};
-  const auto out = close_labels(b, in, w, h, 1);
+  const auto out = closed(b, in, w, h, 1);
   CHECK(out[at(w, 5, 3)] == 4);
   CHECK(out[at(w, 4, 1)] == 4);
   for (int y = 0; y < h; ++y)

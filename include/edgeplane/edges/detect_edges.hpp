@@ -121,8 +121,9 @@ struct interior_columns_kernel {
 /// order), each a dense w-wide image with pad_rows rows of zeros above and below, as many as a
 /// run's neighbours r steps of up to w + 1 elements away can reach: r + ceil(r / w).
 struct edge_points_layout {
-  int w, pad_rows;
-  std::int64_t plane, z, x, y;  // elements per plane; each plane's first element
+  int w = 0, pad_rows = 0;
+  std::int64_t plane = 0, z = 0, x = 0, y = 0;  // elements per plane; each plane's first element
+  edge_points_layout() = default;
   EDGEPLANE_HD edge_points_layout(int width, int height, int r)
       : w(width), pad_rows(r + (r + width - 1) / width), plane(static_cast<std::int64_t>(height + 2 * pad_rows) * width),
         z(0), x(plane), y(2 * plane) {}
@@ -148,13 +149,13 @@ struct valid_runs_rows_kernel {
   int r;
   std::uint8_t* valid;  // dense w x h: 0xff where depth is valid, 0 elsewhere (for the bands)
   projector proj{};
-  float* points = nullptr;  // edge_points_layout(w, h, r).bytes, or null
+  float* points = nullptr;  // the point planes, laid out as `at` says, or null
+  edge_points_layout at{};
   EDGEPLANE_HOST_CLONES EDGEPLANE_HD void operator()(std::int64_t row) const {
     const int y = static_cast<int>(row), w = depth.width;
     std::uint8_t* vr = valid + static_cast<std::int64_t>(y) * w;
     for (int x = 0; x < w; ++x) vr[x] = static_cast<std::uint8_t>(0u - static_cast<unsigned>(depth(x, y) > 0.f));
     if (points != nullptr) {
-      const edge_points_layout at(w, depth.height, r);
       float* zs = points + at.z + at.offset(0, y);
       float* xs = points + at.x + at.offset(0, y);
       float* ys = points + at.y + at.offset(0, y);
@@ -280,8 +281,9 @@ struct all_edges_kernel {
   edge_set set;
   int reach;
   const std::uint8_t* runs = nullptr;  // 8 dense planes of valid-neighbour counts, or null
-  // the point planes of edge_points_layout (the host's row runs need them, with runs)
+  // the point planes (the host's row runs need them, with runs), laid out as points_at says
   const float* points = nullptr;
+  edge_points_layout points_at{};
 
   template <class Direction, int D>
   EDGEPLANE_HD EDGEPLANE_INLINE std::uint8_t along(int x, int y, bool interior, unsigned tests) const {
@@ -568,7 +570,7 @@ struct all_edges_rows_kernel {
       return;
     }
     const std::ptrdiff_t pitch = w;
-    const edge_points_layout at(w, h, r);
+    const edge_points_layout& at = px.points_at;
     const std::int64_t first = at.offset(x0, y);
     const lane_points c{px.points + at.z + first, px.points + at.x + first, px.points + at.y + first};
     const std::int64_t n = static_cast<std::int64_t>(w) * h, i0 = static_cast<std::int64_t>(y) * w + x0;
@@ -764,10 +766,12 @@ void detect_edges(const Backend& b, image_view<const float> depth, const intrins
     std::uint8_t* valid = scratch + at.valid;
     float* points = reinterpret_cast<float*>(scratch + at.points);
     constexpr int band = 32;
-    b.for_each_index(h, detail::valid_runs_rows_kernel{depth, runs, reach, valid, px.proj, points});
+    const detail::edge_points_layout points_at(w, h, reach);
+    b.for_each_index(h, detail::valid_runs_rows_kernel{depth, runs, reach, valid, px.proj, points, points_at});
     b.for_each_index(6 * ((h + band - 1) / band), detail::valid_runs_bands_kernel{depth, runs, reach, band, valid});
     px.runs = runs;
     px.points = points;
+    px.points_at = points_at;
   } else {
     b.for_each_index(h, detail::interior_rows_kernel{depth, edges, reach});
     b.for_each_index(w, detail::interior_columns_kernel{edges, reach});
@@ -783,7 +787,7 @@ void close_edges(const Backend& b, image_view<const std::uint8_t> edges, image_v
                  image_view<std::uint8_t> mask, int r) {
   detail::check_same_size(edges, mask, "edges", "mask");
   detail::check_same_size(edges, scratch, "edges", "scratch");
-  if constexpr (detail::row_lanes<Backend> > 1) {
+  if constexpr (Backend::host_accessible) {  // host: by rows
     b.for_each_index(edges.height, detail::mask_rows_kernel<true>{edges, scratch, r});
     b.for_each_index(edges.height, detail::mask_rows_kernel<false>{scratch, mask, r});
   } else {

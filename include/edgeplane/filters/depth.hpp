@@ -248,7 +248,7 @@ template <class Backend>
 void close_depth(const Backend& b, image_view<float> depth, image_view<float> scratch, image_view<float> out, int r) {
   detail::check_same_size(depth, scratch, "depth", "scratch");
   detail::check_same_size(depth, out, "depth", "output");
-  if constexpr (detail::row_lanes<Backend> > 1) {  // host: by rows
+  if constexpr (Backend::host_accessible) {  // host: by rows
     b.for_each_index(depth.height, detail::depth_rows_kernel<true>{depth, depth, scratch, r});
     b.for_each_index(depth.height, detail::depth_rows_kernel<false>{depth, scratch, out, r});
   } else {

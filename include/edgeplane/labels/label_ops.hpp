@@ -326,3 +326,23 @@ struct upsample_kernel {
 };
 
 }  // namespace edgeplane::detail
+
+namespace edgeplane {
+/// The final closing of a label image (dilate, then erode, (2r+1)^2 window; see
+/// detail::label_dilate_kernel and detail::label_erode_kernel): `dilated` receives the dilation,
+/// `out` the closed labels (three distinct images of one size, in the backend's memory).  Host
+/// backends run by rows (detail::label_rows_kernel).  Asynchronous on device backends.
+template <class Backend>
+void close_labels(const Backend& b, image_view<const std::uint16_t> labels, image_view<std::uint16_t> dilated,
+                  image_view<std::uint16_t> out, int r) {
+  detail::check_same_size(labels, dilated, "labels", "dilated labels");
+  detail::check_same_size(labels, out, "labels", "closed labels");
+  if constexpr (Backend::host_accessible) {
+    b.for_each_index(labels.height, detail::label_rows_kernel<true>{labels, labels, dilated, r});
+    b.for_each_index(labels.height, detail::label_rows_kernel<false>{labels, dilated, out, r});
+  } else {
+    detail::for_each_pixel(b, labels.width, labels.height, detail::label_dilate_kernel{labels, dilated, r});
+    detail::for_each_pixel(b, labels.width, labels.height, detail::label_erode_kernel{labels, dilated, out, r});
+  }
+}
+}  // namespace edgeplane
