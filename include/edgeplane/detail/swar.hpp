@@ -17,4 +17,19 @@ EDGEPLANE_HD EDGEPLANE_INLINE std::uint64_t load(const void* p) {
   return v;
 }
 
+/// Bit i set where byte i of x (every byte at most 127) is at least t: bytes or-ed with 0x80 less
+/// t cannot borrow from their neighbours, and keep their top bit exactly where they were >= t;
+/// three folds (shifts and ors, no multiply) gather the 8 flags into the low byte.  t <= 0: every
+/// bit; t > 127: none.
+EDGEPLANE_HD EDGEPLANE_INLINE unsigned bytes_at_least(std::uint64_t x, int t) {
+  if (t <= 0) return 0xffu;
+  if (t > 127) return 0u;
+  constexpr std::uint64_t high = 0x8080808080808080ull;
+  std::uint64_t f = (((x | high) - ones8 * static_cast<std::uint64_t>(t)) & high) >> 7;  // flag i at bit 8 i
+  f |= f >> 7;   // flags 2j, 2j + 1 at bits 16 j, 16 j + 1
+  f |= f >> 14;  // flags 4j .. 4j + 3 at bits 32 j .. 32 j + 3
+  f |= f >> 28;  // all 8 at bits 0 .. 7
+  return static_cast<unsigned>(f & 0xffu);
+}
+
 }  // namespace edgeplane::detail::swar

@@ -362,15 +362,14 @@ struct all_edges_rows_kernel {
   }
 
   // ORs into maybe[l] the bit 4 D + j of every test j along Direction whose first condition does
-  // not reject lane l.  The jump test takes its side counts (cl, cr: nl and nr) into account
-  // (Checked = false: every count is at reach, so no masks are needed); the extrema, corner and
+  // not reject lane l (x0: lane 0's column).  The jump test takes its sides' presence (nl, nr >= 1)
+  // into account (Checked = false: every count is at reach, so no masks are needed); the extrema, corner and
   // curved bits are the caller's to clear where the counts reject the test (the scalar test's
   // first check).  A lane reads neighbours beyond its counts (invalid depth, or pixels of other
   // rows past the border: garbage, whose bits are cleared).
   template <class Direction, int D, bool Checked>
-  EDGEPLANE_HD EDGEPLANE_INLINE void maybe_along(const lane_points& c, std::ptrdiff_t pitch,
+  EDGEPLANE_HD EDGEPLANE_INLINE void maybe_along(const lane_points& c, std::ptrdiff_t pitch, int x0,
                                                  const float* zc, const float* noise_co, const float* noise_cu,
-                                                 const std::uint8_t* cl, const std::uint8_t* cr,
                                                  unsigned* maybe) const {
     constexpr int dx = Direction::dx, dy = Direction::dy;
     const std::ptrdiff_t step = static_cast<std::ptrdiff_t>(dy) * pitch + dx;
@@ -380,12 +379,21 @@ struct all_edges_rows_kernel {
       // g++ does not vectorize): a missing side's step is -1 there, so it never jumps, and the
       // other side's bound is t + t_ratio * 0 = t; a present side's step is >= 0, so
       // (d > 0 ? d : 0) is d.
+      // A side has its nearest neighbour (nl >= 1) where that pixel is inside the image and
+      // valid: the padded planes hold 0 above and below the image, so only a column past the
+      // first or last needs its own check.  (From the depths, not the count bytes: g++ widens
+      // bytes to the lanes' 32 bits in 16-byte pieces, which the next full-width read of `maybe`
+      // then waits for.)
       const edge_type::jump& j = s.jump;
+      const int w = px.depth.width;
       for (int l = 0; l < Lanes; ++l) {
         const float z = zc[l];
         const float t = j.t_abs + j.t_quad * z * z;
-        const float dl = fabsf(c[l - step] - z), dr = fabsf(c[l + step] - z);
-        const bool hl = !Checked || cl[l] >= 1, hr = !Checked || cr[l] >= 1;
+        const float zl = c[l - step], zr = c[l + step];
+        const float dl = fabsf(zl - z), dr = fabsf(zr - z);
+        const int u = x0 + l;
+        const bool hl = !Checked || ((zl > 0.f) & (u - dx >= 0) & (u - dx < w)),
+                   hr = !Checked || ((zr > 0.f) & (u + dx >= 0) & (u + dx < w));
         const bool jl = hl & ((hr & (dl > t + j.t_ratio * dr)) | (!hr & (dl > t)));
         const bool jr = hr & ((hl & (dr > t + j.t_ratio * dl)) | (!hl & (dr > t)));
         maybe[l] |= static_cast<unsigned>(jl | jr) << (4 * D);
@@ -546,16 +554,12 @@ struct all_edges_rows_kernel {
   }
 
   template <bool Checked>
-  EDGEPLANE_HD EDGEPLANE_INLINE void maybe_all(const lane_points& c, std::ptrdiff_t pitch, const float* zc,
-                                               const float* noise_co, const float* noise_cu, const std::uint8_t* cnt,
-                                               std::int64_t n, unsigned* maybe) const {
-    maybe_along<direction::horizontal, 0, Checked>(c, pitch, zc, noise_co, noise_cu, cnt, cnt + n, maybe);
-    maybe_along<direction::vertical, 1, Checked>(c, pitch, zc, noise_co, noise_cu, cnt + 2 * n, cnt + 3 * n,
-                                                 maybe);
-    maybe_along<direction::left_diagonal, 2, Checked>(c, pitch, zc, noise_co, noise_cu, cnt + 4 * n,
-                                                      cnt + 5 * n, maybe);
-    maybe_along<direction::right_diagonal, 3, Checked>(c, pitch, zc, noise_co, noise_cu, cnt + 6 * n,
-                                                       cnt + 7 * n, maybe);
+  EDGEPLANE_HD EDGEPLANE_INLINE void maybe_all(const lane_points& c, std::ptrdiff_t pitch, int x0, const float* zc,
+                                               const float* noise_co, const float* noise_cu, unsigned* maybe) const {
+    maybe_along<direction::horizontal, 0, Checked>(c, pitch, x0, zc, noise_co, noise_cu, maybe);
+    maybe_along<direction::vertical, 1, Checked>(c, pitch, x0, zc, noise_co, noise_cu, maybe);
+    maybe_along<direction::left_diagonal, 2, Checked>(c, pitch, x0, zc, noise_co, noise_cu, maybe);
+    maybe_along<direction::right_diagonal, 3, Checked>(c, pitch, x0, zc, noise_co, noise_cu, maybe);
   }
 
   EDGEPLANE_HOST_CLONES EDGEPLANE_HD void operator()(std::int64_t item) const {
@@ -594,21 +598,30 @@ struct all_edges_rows_kernel {
       full = diff == 0;
     }
     if (full) {
-      maybe_all<false>(c, pitch, zc, noise_co, noise_cu, cnt, n, maybe);
+      maybe_all<false>(c, pitch, x0, zc, noise_co, noise_cu, maybe);
     } else {
-      maybe_all<true>(c, pitch, zc, noise_co, noise_cu, cnt, n, maybe);
+      maybe_all<true>(c, pitch, x0, zc, noise_co, noise_cu, maybe);
       // The extrema, corner and curved pre-tests ran on every lane; each stays open only where
-      // both of its counts reach its neighbours (the scalar test's first check).
-      const int ne = px.set.extrema.n, nco = px.set.corner.n, ncu = px.set.curved.n;
-      for (int d = 0; d < 4; ++d) {
-        const std::uint8_t* cl = cnt + 2 * d * n;
-        const std::uint8_t* cr = cnt + (2 * d + 1) * n;
-        for (int l = 0; l < Lanes; ++l) {
-          const int m = cl[l] < cr[l] ? cl[l] : cr[l];
-          const unsigned keep = 1u | static_cast<unsigned>(m >= ne) << 1 | static_cast<unsigned>(m >= nco) << 2 |
-                                static_cast<unsigned>(m >= ncu) << 3;
-          maybe[l] &= ~(15u << (4 * d)) | (keep << (4 * d));
+      // both of its counts reach its neighbours (the scalar test's first check).  The counts are
+      // compared 8 bytes at a time into one bit per lane (swar::bytes_at_least; counts <= 32),
+      // then spread to the lanes' words.
+      static_assert(Lanes <= 32, "one bit per lane in an unsigned");
+      const int need[3] = {px.set.extrema.n, px.set.corner.n, px.set.curved.n};
+      unsigned keep_bits[12];  // test 1 + j along direction d at 3 d + j
+      for (int d = 0; d < 4; ++d)
+        for (int j = 0; j < 3; ++j) {
+          unsigned m = 0;
+          for (int l = 0; l < Lanes; l += 8)
+            m |= (swar::bytes_at_least(swar::load(cnt + 2 * d * n + l), need[j]) &
+                  swar::bytes_at_least(swar::load(cnt + (2 * d + 1) * n + l), need[j]))
+                 << l;
+          keep_bits[3 * d + j] = m;
         }
+      for (int l = 0; l < Lanes; ++l) {
+        unsigned keep = 0x1111u;  // the jump bits
+        for (int d = 0; d < 4; ++d)
+          for (int j = 0; j < 3; ++j) keep |= ((keep_bits[3 * d + j] >> l) & 1u) << (4 * d + 1 + j);
+        maybe[l] &= keep;
       }
     }
     std::uint8_t* e = &px.edges(x0, y);
