@@ -637,7 +637,7 @@ class segmenter {
     if (down) {
       lab_full_.resize(n_full);
       final_labels = view(lab_full_.data(), w, h);
-      detail::for_each_pixel(b_, w, h, detail::upsample_kernel{la, final_labels});
+      upsample_labels(b_, image_view<const std::uint16_t>(la), final_labels);
     }
     // final statistics at output resolution
     moments_.resize(static_cast<std::size_t>(num_planes + 1) * moment_slots);

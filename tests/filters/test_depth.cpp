@@ -163,6 +163,58 @@ TEST_CASE_TEMPLATE("downscale_depth: a block straddling a depth edge takes the n
   }
 }
 
+// Host backends downscale by rows, without branches; the per-pixel kernel is the reference.
+TEST_CASE("downscale_depth: the host row kernel gives the per-pixel kernel's depths, bit for bit") {
+  lcg_noise noise(21);
+  for (const auto& size : {std::pair{37, 23}, std::pair{64, 40}, std::pair{3, 2}}) {
+    const int w = size.first, h = size.second, pitch = w + 5;
+    CAPTURE(w);
+    std::vector<float> in(static_cast<std::size_t>(pitch) * h, 7.f);
+    for (int by = 0; 2 * by < h; ++by)
+      for (int bx = 0; 2 * bx < w; ++bx) {
+        // per 2x2 block a base depth; the block's depths are the base, exactly the 2 % limit
+        // base * 1.02f, just above it, 1-1.1 m at random (averaging several depths), invalid
+        // ones (0, negative, NaN), a far surface or infinity
+        const float base = 1.f + 0.0005f * static_cast<float>(noise.next_u32(200));
+        const bool hole = noise.next_u32(8) == 0;  // a block without valid depth
+        for (int j = 0; j < 4; ++j) {
+          const int x = 2 * bx + j % 2, y = 2 * by + j / 2;
+          if (x >= w || y >= h) continue;
+          float z = 1.f + 0.0005f * static_cast<float>(noise.next_u32(200));
+          switch (noise.next_u32(20)) {
+            case 0: z = 0.f; break;
+            case 1: z = std::numeric_limits<float>::quiet_NaN(); break;
+            case 2: z = -1.f; break;
+            case 3: z = 3.f; break;
+            case 4: z = std::numeric_limits<float>::infinity(); break;
+            case 5: case 6: case 7: z = base; break;
+            case 8: case 9: case 10: z = base * 1.02f; break;
+            case 11: z = std::nextafter(base * 1.02f, 2.f); break;
+            default: break;
+          }
+          if (hole) z = j == 1 ? std::numeric_limits<float>::quiet_NaN() : 0.f;
+          in[static_cast<std::size_t>(y) * pitch + x] = z;
+        }
+      }
+    const image_view<const float> iv{in.data(), w, h, pitch};
+    const int ow = w / 2, oh = h / 2;
+    std::vector<float> rows(static_cast<std::size_t>(ow) * oh, -5.f), pixels(rows.size(), -6.f);
+    downscale_depth(cpu{}, iv, make_view(rows.data(), ow, oh));
+    for (int y = 0; y < oh; ++y)
+      for (int x = 0; x < ow; ++x) detail::downscale_kernel{iv, make_view(pixels.data(), ow, oh)}(x, y);
+    CHECK(std::memcmp(rows.data(), pixels.data(), rows.size() * sizeof(float)) == 0);
+    int empty = 0, mixed = 0;
+    for (const float z : pixels) {
+      empty += z == 0.f;
+      mixed += z > 1.f && z < 1.2f;
+    }
+    if (ow * oh > 100) {
+      CHECK(empty > 0);  // blocks without a valid depth...
+      CHECK(mixed > 0);  // ...and blocks averaged
+    }
+  }
+}
+
 TEST_CASE_TEMPLATE("smooth_depth: reduces noise on a plane and keeps a depth step sharp", B, EDGEPLANE_TEST_BACKENDS) {
   const int w = 48, h = 36, step_x = 24, r = 2;
   const float k = 2.5f, s0 = 0.0015f, s2 = 0.0015f;  // the default noise model: sigma(2 m) = 7.5 mm

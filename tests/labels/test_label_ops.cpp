@@ -262,18 +262,25 @@ TEST_CASE_TEMPLATE("upsample_kernel: nearest neighbour 2x, odd last row and colu
   const int w = 3, h = 2;
   const std::vector<std::uint16_t> in = {1, 2, 3, 4, 5, 6};
   for (const B& b : variants<B>()) {
-    for (auto [ow, oh] : {std::pair{6, 4}, std::pair{7, 5}}) {
-      CAPTURE(ow);
-      device_array<std::uint16_t, B> src(b, in), out(b, static_cast<std::size_t>(ow) * oh, 0xBEEF);
-      detail::for_each_pixel(b, ow, oh, detail::upsample_kernel{src.cview(w, h), out.view(ow, oh)});
-      const auto o = out.host();
-      for (int y = 0; y < oh; ++y)
-        for (int x = 0; x < ow; ++x) {
-          CAPTURE(x);
-          CAPTURE(y);
-          CHECK(o[at(ow, x, y)] == in[at(w, std::min(x / 2, w - 1), std::min(y / 2, h - 1))]);
-        }
-    }
+    // 6 x 4, 7 x 5: exactly and one more than 2x; 5 x 3: less than 2x (the last source column
+    // and row unused); 9 x 6: more than one repeated column.  Each by the per-pixel kernel and by
+    // upsample_labels (host backends: by rows).
+    for (auto [ow, oh] : {std::pair{6, 4}, std::pair{7, 5}, std::pair{5, 3}, std::pair{9, 6}})
+      for (const bool rows : {false, true}) {
+        CAPTURE(ow);
+        CAPTURE(rows);
+        device_array<std::uint16_t, B> src(b, in), out(b, static_cast<std::size_t>(ow) * oh, 0xBEEF);
+        if (rows)
+          upsample_labels(b, src.cview(w, h), out.view(ow, oh));
+        else
+          detail::for_each_pixel(b, ow, oh, detail::upsample_kernel{src.cview(w, h), out.view(ow, oh)});
+        const auto o = out.host();
+        int wrong = 0;
+        for (int y = 0; y < oh; ++y)
+          for (int x = 0; x < ow; ++x)
+            wrong += o[at(ow, x, y)] != in[at(w, std::min(x / 2, w - 1), std::min(y / 2, h - 1))];
+        CHECK(wrong == 0);
+      }
     // Spot checks written out: the 2x2 block of source pixel (1, 0) and the repeated last column.
     device_array<std::uint16_t, B> src(b, in), out(b, 35, 0);
     detail::for_each_pixel(b, 7, 5, detail::upsample_kernel{src.cview(w, h), out.view(7, 5)});

@@ -313,6 +313,25 @@ struct region_relabel_kernel {
   }
 };
 
+/// upsample_kernel by rows (host backends): each source pixel written to its two output pixels,
+/// a copy the compiler vectorizes, instead of a clamped index per pixel.  in is not empty.
+struct upsample_rows_kernel {
+  image_view<const std::uint16_t> in;
+  image_view<std::uint16_t> out;
+  EDGEPLANE_HOST_CLONES void operator()(std::int64_t row) const {
+    const int y = static_cast<int>(row), w = out.width;
+    const int sy = y / 2 < in.height ? y / 2 : in.height - 1;
+    const std::uint16_t* s = &in(0, sy);
+    std::uint16_t* o = &out(0, y);
+    const int pairs = w / 2 < in.width ? w / 2 : in.width;  // output pixels 2i, 2i + 1 from s[i]
+    for (int i = 0; i < pairs; ++i) {
+      o[2 * i] = s[i];
+      o[2 * i + 1] = s[i];
+    }
+    for (int x = 2 * pairs; x < w; ++x) o[x] = s[x / 2 < in.width ? x / 2 : in.width - 1];
+  }
+};
+
 /// Nearest-neighbour 2x upsampling (odd last rows/columns repeat the last source pixel).
 struct upsample_kernel {
   image_view<const std::uint16_t> in;
@@ -332,6 +351,20 @@ namespace edgeplane {
 /// detail::label_dilate_kernel and detail::label_erode_kernel): `dilated` receives the dilation,
 /// `out` the closed labels (three distinct images of one size, in the backend's memory).  Host
 /// backends run by rows (detail::label_rows_kernel).  Asynchronous on device backends.
+/// Nearest-neighbour 2x upsampling of a label image into out (odd last rows and columns repeat
+/// the last source pixel; see detail::upsample_kernel).  Asynchronous on device backends.
+template <class Backend>
+void upsample_labels(const Backend& b, image_view<const std::uint16_t> in, image_view<std::uint16_t> out) {
+  if (out.width <= 0 || out.height <= 0) return;
+  if constexpr (Backend::host_accessible) {
+    if (in.width > 0 && in.height > 0) {
+      b.for_each_index(out.height, detail::upsample_rows_kernel{in, out});
+      return;
+    }
+  }
+  detail::for_each_pixel(b, out.width, out.height, detail::upsample_kernel{in, out});
+}
+
 template <class Backend>
 void close_labels(const Backend& b, image_view<const std::uint16_t> labels, image_view<std::uint16_t> dilated,
                   image_view<std::uint16_t> out, int r) {
