@@ -122,6 +122,15 @@ inline constexpr bool has_label_lanes<Labels, decltype(std::declval<const Labels
 struct image_labels {
   image_view<const std::uint16_t> labels;
   EDGEPLANE_HD std::int32_t operator()(int x, int y) const { return labels(x, y); }
+  /// out[l] = (*this)(x + l, y) for l < L (host lanes of moments_kernel): the L labels read in
+  /// one copy, then widened (read one by one, g++ assembled them through 2-byte stack stores that
+  /// the next wider load had to wait for).
+  template <int L>
+  EDGEPLANE_HD EDGEPLANE_INLINE void lanes(int x, int y, std::int32_t* out) const {
+    std::uint16_t v[L];
+    std::memcpy(v, &labels(x, y), sizeof v);
+    for (int l = 0; l < L; ++l) out[l] = v[l];
+  }
 };
 
 /// llrint(double(v) * fixed_per_metre): the fixed-point coordinate of v metres.  On the host it is
