@@ -180,20 +180,28 @@ struct valid_runs_rows_kernel {
     // Blocks of 64 pixels walk their neighbours together, byte lanes (vectorizable), instead of
     // a running count whose every step waits for the one before: a copy of the block's window of
     // validity bytes, 0 outside the row, then per step k the lanes still on valid pixels count.
+    // A block whose window lies inside the row reads the validity row in place; only the blocks
+    // at the row's ends copy theirs, padded with zeros.  (A copy made just before its reads cost a
+    // fifth of this kernel: each unaligned 64-byte read of it spans two of the copy's pending
+    // stores, and such a load waits until they have retired.)
     constexpr int block = 64;
     std::uint8_t win[block + 2 * 255];
     for (int x0 = 0; x0 < w; x0 += block) {
-      for (int j = 0; j < block + 2 * r; ++j) {
-        const int u = x0 - r + j;
-        win[j] = u >= 0 && u < w ? vr[u] : 0;
+      const std::uint8_t* wv = vr + (x0 - r);  // wv[j]: the validity of pixel x0 - r + j
+      if (x0 - r < 0 || x0 + block + r > w) {
+        for (int j = 0; j < block + 2 * r; ++j) {
+          const int u = x0 - r + j;
+          win[j] = u >= 0 && u < w ? vr[u] : 0;
+        }
+        wv = win;
       }
       std::uint8_t okl[block], cl[block], okr[block], cr[block];
       for (int l = 0; l < block; ++l) okl[l] = okr[l] = 1, cl[l] = cr[l] = 0;
       for (int k = 1; k <= r; ++k)
         for (int l = 0; l < block; ++l) {
-          okl[l] = static_cast<std::uint8_t>(okl[l] & win[r + l - k]);
+          okl[l] = static_cast<std::uint8_t>(okl[l] & wv[r + l - k]);
           cl[l] = static_cast<std::uint8_t>(cl[l] + okl[l]);
-          okr[l] = static_cast<std::uint8_t>(okr[l] & win[r + l + k]);
+          okr[l] = static_cast<std::uint8_t>(okr[l] & wv[r + l + k]);
           cr[l] = static_cast<std::uint8_t>(cr[l] + okr[l]);
         }
       const int m = w - x0 < block ? w - x0 : block;
