@@ -187,13 +187,14 @@ struct valid_runs_rows_kernel {
     constexpr int block = 64;
     std::uint8_t win[block + 2 * 255];
     for (int x0 = 0; x0 < w; x0 += block) {
-      const std::uint8_t* wv = vr + (x0 - r);  // wv[j]: the validity of pixel x0 - r + j
-      if (x0 - r < 0 || x0 + block + r > w) {
+      const std::uint8_t* wv = win;  // wv[j]: the validity of pixel x0 - r + j
+      if (x0 - r >= 0 && x0 + block + r <= w) {
+        wv = vr + (x0 - r);
+      } else {
         for (int j = 0; j < block + 2 * r; ++j) {
           const int u = x0 - r + j;
           win[j] = u >= 0 && u < w ? vr[u] : 0;
         }
-        wv = win;
       }
       std::uint8_t okl[block], cl[block], okr[block], cr[block];
       for (int l = 0; l < block; ++l) okl[l] = okr[l] = 1, cl[l] = cr[l] = 0;
