@@ -2,6 +2,7 @@
 // test with its splitting, and mask pixels ending runs.
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <utility>
 #include <vector>
@@ -204,7 +205,7 @@ TEST_CASE_TEMPLATE("line_test: the host lanes' search finds operator()'s worst p
                    direction::left_diagonal, direction::right_diagonal) {
   // A tilted plane with depth noise of a few millimetres and sparse spikes, in a pitched view:
   // runs of every length from 1 to the diagonal's, starting anywhere, pass or fail the same way
-  // and fail at the same point (the 16-lane blocks, the partial last block and the second sweep).
+  // and fail at the same point (the 16-lane blocks, the partial last block and each lane's first worst point).
   const int w = 61, h = 57, pitch = 67;
   const auto k = camera(w, h);
   const auto flat = plane_image(k, w, h, normalized({0.2, -0.3, -1.0}), 1.7);
@@ -234,4 +235,34 @@ TEST_CASE_TEMPLATE("line_test: the host lanes' search finds operator()'s worst p
     }
   CHECK(failing > 500);
   CHECK(passing > 1000);
+}
+
+TEST_CASE_TEMPLATE("line_test: of two points with the same largest excess, the first is the worst", D,
+                   direction::left_diagonal, direction::right_diagonal) {
+  // fx = fy = 1, the principal point on the diagonal and whole-number depths: every coordinate and
+  // every product of the distance computation is a small integer, so two equal spikes (depth 4 ->
+  // 68 on a plane at depth 4, the chord's line at depth 4) have exactly the same excess wherever
+  // they lie. Pairs in the same lane of a 16-point block, in different lanes and in different
+  // blocks all name the first spike; a larger second spike is named instead.
+  const int n = 41;
+  const intrinsics k{1.f, 1.f, 20.f, 20.f};
+  const auto proj = detail::make_projector(k);
+  const params p = presets::thesis_full();
+  const detail::line_test test{p.t_line, 0.f, detail::make_noise(p.noise)};
+  const int x0 = D::dx == 1 ? 0 : n - 1;
+  std::vector<float> depth(static_cast<std::size_t>(n) * n);
+  for (int i = 1; i < n - 1; ++i)
+    for (int j = i + 1; j < n - 1; ++j)
+      for (float second : {68.f, 69.f}) {
+        CAPTURE(i);
+        CAPTURE(j);
+        CAPTURE(second);
+        std::fill(depth.begin(), depth.end(), 4.f);
+        depth[at(n, x0 + i * D::dx, i)] = 68.f;
+        depth[at(n, x0 + j * D::dx, j)] = second;
+        const image_view<const float> view{depth.data(), n, n, n};
+        const int want = second == 68.f ? i : j;
+        REQUIRE(test(view, proj, x0, 0, n, D{}) == want);
+        REQUIRE(test.template worst_lanes<D>(view, proj, x0, 0, n) == want);
+      }
 }

@@ -67,10 +67,12 @@ struct line_test {
 
   /// operator()'s answer, computed 16 points at a time with the very same float operations (host
   /// backends: one SIMD lane per point, the strided depths gathered).  The worst point is the first
-  /// whose excess d - tol equals the largest excess, when that is > 0; so one vector sweep takes
-  /// the largest excess per lane, and only a failing run is swept again, up to its first point with
-  /// that excess.  The last, partial block repeats the last inner point in its spare lanes, which
-  /// changes neither the largest excess nor the first point that has it.
+  /// whose excess d - tol equals the largest excess, when that is > 0.  One vector sweep keeps, per
+  /// lane, the largest excess and the first point that reached it (a later point replaces it only
+  /// when strictly larger); a point with the run's largest excess m lies in a lane whose largest is
+  /// m, so the first such point is the smallest of those lanes' first points.  The last, partial
+  /// block repeats the last inner point in its spare lanes, which changes neither the largest
+  /// excess nor the first point that has it.
   template <class Direction>
   EDGEPLANE_INLINE int worst_lanes(image_view<const float> depth, projector proj, int x0, int y0, int len) const {
     constexpr int lanes = 16;
@@ -89,7 +91,7 @@ struct line_test {
       return excess(proj(x0 + k * Direction::dx, y0 + k * Direction::dy, z), z, a, b, chord_tol);
     };
     if (last < 1) return -1;
-    int kl[lanes];
+    int kl[lanes], at[lanes] = {};
     float zl[lanes], most[lanes] = {};
     // A block whose points all lie surely within their tolerance (num < l2 tol^2 (1 - 1e-4), with
     // num = |(p - a) x (b - a)|^2 and l2 = |b - a|^2: then the excess, num / l2 and its square root
@@ -114,19 +116,17 @@ struct line_test {
       if (!doubt) continue;
       for (int j = 0; j < lanes; ++j) {
         const float e = excess_at(kl[j], zl[j]);
-        most[j] = e > most[j] ? e : most[j];
+        const bool up = e > most[j];
+        most[j] = up ? e : most[j];
+        at[j] = up ? kl[j] : at[j];
       }
     }
     float m = 0.f;
     for (int j = 0; j < lanes; ++j) m = most[j] > m ? most[j] : m;
     if (!(m > 0.f)) return -1;
-    for (int k = 1; k <= last; k += lanes) {
-      gather(k, kl, zl);
-      unsigned hit = 0;
-      for (int j = 0; j < lanes; ++j) hit |= (excess_at(kl[j], zl[j]) == m ? 1u : 0u) << j;
-      if (hit != 0) return k + __builtin_ctz(hit);
-    }
-    return -1;  // not reached: m is some point's excess
+    int worst = last + 1;
+    for (int j = 0; j < lanes; ++j) worst = most[j] == m && at[j] < worst ? at[j] : worst;
+    return worst;
   }
 };
 
