@@ -205,7 +205,8 @@ TEST_CASE_TEMPLATE("line_test: the host lanes' search finds operator()'s worst p
                    direction::left_diagonal, direction::right_diagonal) {
   // A tilted plane with depth noise of a few millimetres and sparse spikes, in a pitched view:
   // runs of every length from 1 to the diagonal's, starting anywhere, pass or fail the same way
-  // and fail at the same point (the 16-lane blocks, the partial last block and each lane's first worst point).
+  // and fail at the same point (the 16-lane blocks, the partial last block, each lane's first
+  // worst point).
   const int w = 61, h = 57, pitch = 67;
   const auto k = camera(w, h);
   const auto flat = plane_image(k, w, h, normalized({0.2, -0.3, -1.0}), 1.7);
