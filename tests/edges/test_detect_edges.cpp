@@ -318,6 +318,32 @@ TEST_CASE("swar::bytes_at_least: bit i is byte i >= t, for every count, threshol
   CHECK(wrong == 0);
 }
 
+TEST_CASE("swar::nonzero_bytes: bit i is byte i != 0, for every byte value and position") {
+  lcg_noise noise(9);
+  int wrong = 0, calls = 0;
+  for (int v = 0; v < 256; ++v)
+    for (int pos = 0; pos < 8; ++pos)
+      for (int rep = 0; rep < 16; ++rep) {
+        std::uint64_t x = 0;
+        unsigned want = 0;
+        for (int i = 0; i < 8; ++i) {  // v at pos; elsewhere 0, 0x80 or any byte
+          const unsigned pick = noise.next_u32(4);
+          const unsigned b = i == pos ? static_cast<unsigned>(v) : pick == 0 ? 0u : pick == 1 ? 0x80u : noise.next_u32(256);
+          x |= static_cast<std::uint64_t>(b) << (8 * i);
+          want |= static_cast<unsigned>(b != 0) << i;
+        }
+        const unsigned got = detail::swar::nonzero_bytes(x);
+        wrong += got != want;
+        ++calls;
+        if (got != want && wrong <= 3) {
+          CAPTURE(x);
+          CHECK(got == want);
+        }
+      }
+  CHECK(calls == 256 * 8 * 16);
+  CHECK(wrong == 0);
+}
+
 // The valid-neighbour counts the host edge pass reads: plane 2 d + s holds, for every pixel, how
 // many consecutive valid pixels follow it on side s of direction d (at most r, stopping at the
 // border), counted here one by one.

@@ -267,3 +267,56 @@ TEST_CASE_TEMPLATE("line_test: of two points with the same largest excess, the f
         REQUIRE(test.template worst_lanes<D>(view, proj, x0, 0, n) == want);
       }
 }
+
+TEST_CASE_TEMPLATE("extract_segments: the host's walk of diagonals in blocks keeps the runs one walk per diagonal keeps", D,
+                   direction::left_diagonal, direction::right_diagonal) {
+  // Noisy tilted planes with spikes (runs that pass, fail and split) under random masks whose
+  // density changes across the image, with mask values other than 1 and zeros in the pitch padding
+  // (a block that read past its row would join runs across it). The sizes take each block width
+  // (4, 8 and 16 diagonals) and blocks that lie partly or wholly outside the image.
+  const std::pair<int, int> sizes[] = {{1, 1}, {1, 40}, {40, 1}, {5, 3}, {3, 29}, {37, 29}, {300, 250}, {600, 500}};
+  const std::uint8_t edge_values[] = {1, 2, 0x80, 0xff};
+  edgeplane::test::noise_source rng{11};
+  int kept_total = 0;
+  for (auto [w, h] : sizes) {
+    CAPTURE(w);
+    CAPTURE(h);
+    const int pitch = w + 5;
+    const auto k = camera(w, h);
+    const auto flat = plane_image(k, w, h, normalized({0.2, -0.3, -1.0}), 1.7);
+    std::vector<float> depth(static_cast<std::size_t>(pitch) * h, 1.f);
+    std::vector<std::uint8_t> mask(depth.size(), 0);
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        float z = flat[at(w, x, y)] + static_cast<float>(0.003 * rng.gaussian());
+        if (rng.uniform() < 0.01) z += 0.05f;
+        const std::size_t i = static_cast<std::size_t>(y) * pitch + x;
+        depth[i] = z;
+        const double density = 0.01 + 0.2 * x / w + 0.1 * y / h;
+        if (rng.uniform() < density) mask[i] = edge_values[rng.uniform() < 0.5 ? 0 : static_cast<int>(rng.uniform() * 4)];
+      }
+    const image_view<const float> zv{depth.data(), w, h, pitch};
+    const image_view<const std::uint8_t> mv{mask.data(), w, h, pitch};
+    const params p = presets::thesis_full();
+    std::vector<std::uint8_t> want(depth.size(), 0), got(depth.size(), 0x5a);
+    const detail::diagonal_runs_kernel<D, true> one{zv,
+                                                    mv,
+                                                    image_view<std::uint8_t>{want.data(), w, h, pitch},
+                                                    detail::make_projector(k),
+                                                    p.t_length,
+                                                    p.max_run_splits,
+                                                    detail::line_test{p.t_line, p.noise_k, detail::make_noise(p.noise)}};
+    for (std::int64_t i = 0; i < detail::diagonal_count(w, h); ++i) one(i);
+    extract_segments<D>(cpu{}, zv, mv, k, p, image_view<std::uint8_t>{got.data(), w, h, pitch});
+    int kept = 0, differ = 0;
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        const std::size_t i = static_cast<std::size_t>(y) * pitch + x;
+        kept += want[i];
+        differ += got[i] != want[i];
+      }
+    CHECK(differ == 0);
+    kept_total += kept;
+  }
+  CHECK(kept_total > 20000);
+}

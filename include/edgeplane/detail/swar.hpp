@@ -32,4 +32,15 @@ EDGEPLANE_HD EDGEPLANE_INLINE unsigned bytes_at_least(std::uint64_t x, int t) {
   return static_cast<unsigned>(f & 0xffu);
 }
 
+/// Bit i set where byte i of x is not 0 (any value): the low 7 bits plus 0x7f carry into the top
+/// bit exactly when one of them is set, without reaching the next byte; gathered as above.
+EDGEPLANE_HD EDGEPLANE_INLINE unsigned nonzero_bytes(std::uint64_t x) {
+  constexpr std::uint64_t low7 = 0x7f7f7f7f7f7f7f7full, high = 0x8080808080808080ull;
+  std::uint64_t f = ((((x & low7) + low7) | x) & high) >> 7;
+  f |= f >> 7;
+  f |= f >> 14;
+  f |= f >> 28;
+  return static_cast<unsigned>(f & 0xffu);
+}
+
 }  // namespace edgeplane::detail::swar

@@ -1,11 +1,13 @@
 // edgeplane: plane-candidate line segments.  One work item walks one diagonal of the image and
 // keeps the runs of non-edge pixels that are longer than t_length and straight in 3-D.
 #pragma once
+#include <algorithm>
 #include <cstdint>
 
 #include "edgeplane/camera.hpp"
 #include "edgeplane/config.hpp"
 #include "edgeplane/detail/geometry.hpp"
+#include "edgeplane/detail/swar.hpp"
 #include "edgeplane/edges/directions.hpp"
 #include "edgeplane/image.hpp"
 #include "edgeplane/params.hpp"
@@ -209,6 +211,65 @@ struct diagonal_runs_kernel {
   }
 };
 
+/// The host walk: one work item walks L adjacent diagonals together, row by row, so that each row
+/// step reads the L lanes' mask bytes from one place (lane j of diagonal k0 + j lies at column
+/// xb(y) + j of row y) instead of one cache line per pixel and diagonal, and finds the lanes whose
+/// run ends or starts as bits (8 mask bytes at a time where L is a multiple of 8).  A lane's run
+/// ends at a mask pixel or where its diagonal leaves the image (lanes outside it read as mask), and
+/// goes to walk.process as diagonal_runs_kernel::operator() sends it: the same runs, in another
+/// order, each writing only its own pixels of `covered`.
+template <class Direction, int L>
+struct diagonal_block_runs_kernel {
+  static_assert(L >= 1 && L <= 32, "one bit per lane in an unsigned");
+  diagonal_runs_kernel<Direction, true> walk;
+
+  /// Column of block k0's lane 0 at row y.
+  int lane0_x(int k0, int y) const { return Direction::dx == 1 ? k0 - (walk.depth.height - 1) + y : k0 - y; }
+
+  EDGEPLANE_HOST_CLONES void operator()(std::int64_t block) const {
+    const int w = walk.depth.width, h = walk.depth.height;
+    const int k0 = static_cast<int>(block * L);
+    // the rows where some lane's diagonal is inside the image
+    int ylo, yhi;
+    if constexpr (Direction::dx == 1) {  // k = x - y + (h - 1)
+      ylo = std::max(0, h - 1 - (k0 + L - 1));
+      yhi = std::min(h - 1, w + h - 2 - k0);
+    } else {  // k = x + y
+      ylo = std::max(0, k0 - w + 1);
+      yhi = std::min(h - 1, k0 + L - 1);
+    }
+    constexpr unsigned all = L == 32 ? ~0u : (1u << L) - 1u;
+    int start[L] = {};   // the first row of each lane's open run
+    unsigned open = 0;  // lanes with an open run
+    std::uint8_t pad[L];
+    const auto end_runs = [&](unsigned ends, int y) {  // runs that ended just before row y
+      for (; ends != 0; ends &= ends - 1) {
+        const int j = __builtin_ctz(ends);
+        walk.process(lane0_x(k0, start[j]) + j, start[j], y - start[j]);
+      }
+    };
+    for (int y = ylo; y <= yhi; ++y) {
+      const int xb = lane0_x(k0, y);
+      const std::uint8_t* m = pad;
+      if (xb >= 0 && xb + L <= w) {
+        m = &walk.mask(xb, y);
+      } else {
+        for (int j = 0; j < L; ++j) pad[j] = xb + j >= 0 && xb + j < w ? walk.mask(xb + j, y) : 1;
+      }
+      unsigned edge = 0;  // lanes on a mask pixel (or outside the image)
+      if constexpr (L % 8 == 0) {
+        for (int b = 0; b < L / 8; ++b) edge |= swar::nonzero_bytes(swar::load(m + 8 * b)) << (8 * b);
+      } else {
+        for (int j = 0; j < L; ++j) edge |= static_cast<unsigned>(m[j] != 0) << j;
+      }
+      if (const unsigned ends = edge & open) end_runs(ends, y);
+      for (unsigned starts = ~edge & ~open & all; starts != 0; starts &= starts - 1) start[__builtin_ctz(starts)] = y;
+      open = ~edge & all;
+    }
+    end_runs(open, yhi + 1);
+  }
+};
+
 }  // namespace detail
 
 /// Extracts the kept diagonal runs along Direction (direction::left_diagonal or right_diagonal):
@@ -229,7 +290,17 @@ void extract_segments(const Backend& b, image_view<const float> depth, image_vie
   else
     for (int y = 0; y < covered.height; ++y)
       b.memset(covered.data + static_cast<std::ptrdiff_t>(y) * covered.pitch, 0, static_cast<std::size_t>(covered.width));
-  b.for_each_index(detail::diagonal_count(depth.width, depth.height), f);
+  const std::int64_t n = detail::diagonal_count(depth.width, depth.height);
+  if constexpr (Backend::host_accessible) {  // host: L diagonals a work item, at least 64 items where there are
+    if (n >= 64 * 16)
+      b.for_each_index((n + 15) / 16, detail::diagonal_block_runs_kernel<Direction, 16>{f});
+    else if (n >= 64 * 8)
+      b.for_each_index((n + 7) / 8, detail::diagonal_block_runs_kernel<Direction, 8>{f});
+    else
+      b.for_each_index((n + 3) / 4, detail::diagonal_block_runs_kernel<Direction, 4>{f});
+  } else {
+    b.for_each_index(n, f);
+  }
 }
 
 }  // namespace edgeplane
