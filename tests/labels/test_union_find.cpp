@@ -414,10 +414,13 @@ TEST_CASE("count_roots_blocks_kernel flattens, counts as count_roots_kernel does
 TEST_CASE_TEMPLATE("grid4_adjacency: components equal a serial union-find on random images", B, EDGEPLANE_TEST_BACKENDS) {
   // Random depth in levels 4 cm apart (one step joins within the 6 cm bound, two do not, so
   // joining is not transitive), random holes, odd sizes, single rows and columns; the serial
-  // reference unites every pair the adjacency names.
+  // reference unites every pair the adjacency names.  Widths of whole 16-pixel blocks and tails
+  // (the host's lanes of joins), and sparse holes that leave long runs lying on runs (the host
+  // skips the vertical pairs already joined through their left neighbours).
   lcg_noise rng(17);
-  for (const auto& [w, h] : {std::pair{1, 1}, std::pair{1, 9}, std::pair{13, 1}, std::pair{37, 23}, std::pair{64, 40}}) {
-    for (const double holes : {0.0, 0.2, 0.6}) {
+  for (const auto& [w, h] :
+       {std::pair{1, 1}, std::pair{1, 9}, std::pair{13, 1}, std::pair{37, 23}, std::pair{64, 40}, std::pair{100, 30}}) {
+    for (const double holes : {0.0, 0.02, 0.2, 0.6}) {
       CAPTURE(w);
       CAPTURE(h);
       CAPTURE(holes);

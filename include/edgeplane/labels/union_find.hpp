@@ -95,6 +95,15 @@ inline constexpr bool has_grid_joins = is_grid_adjacency<Adjacency> && requires(
   a.joins_down(0, 0);
 };
 
+/// Grid-join adjacencies that also give joins_right / joins_down for L pixels of a row at once as
+/// bits (right_lanes<L>(x, y): needs x + L < width; down_lanes<L>(x, y): x + L <= width and
+/// y + 1 < height), computed without branches so that host row passes vectorize them.
+template <class Adjacency>
+inline constexpr bool has_join_lanes = has_grid_joins<Adjacency> && requires(const Adjacency& a) {
+  a.template right_lanes<16>(0, 0);
+  a.template down_lanes<16>(0, 0);
+};
+
 /// Host row pass of connected_components for adjacencies with has_grid_joins (one work item per
 /// row; rows are independent): parent[i] = -1 for inactive elements, else the first element of
 /// its run of horizontally joined pixels, which is the run's smallest element and its root so far.
@@ -103,12 +112,32 @@ struct uf_init_runs_kernel {
   Active active;
   Adjacency adj;
   std::int32_t* parent;
-  EDGEPLANE_HD void operator()(std::int64_t row) const {
+  EDGEPLANE_HOST_CLONES EDGEPLANE_HD void operator()(std::int64_t row) const {
     const int y = static_cast<int>(row), w = adj.grid_width();
     const std::int64_t o = static_cast<std::int64_t>(y) * w;
     std::int32_t start = -1;
     bool joined = false;  // the previous pixel joins this one
-    for (int x = 0; x < w; ++x) {
+    int x = 0;
+    if constexpr (has_join_lanes<Adjacency>) {  // 16 pixels' activity and right joins as bits first
+      constexpr int L = 16;
+      for (; x + L < w; x += L) {
+        unsigned act = 0;
+        for (int l = 0; l < L; ++l) act |= static_cast<unsigned>(active(o + x + l)) << l;
+        const unsigned right = adj.template right_lanes<L>(x, y);
+        for (int l = 0; l < L; ++l) {
+          const std::int64_t i = o + x + l;
+          if (!((act >> l) & 1u)) {
+            parent[i] = -1;
+            joined = false;
+            continue;
+          }
+          if (!joined) start = static_cast<std::int32_t>(i);
+          parent[i] = start;
+          joined = (right >> l) & 1u;
+        }
+      }
+    }
+    for (; x < w; ++x) {
       const std::int64_t i = o + x;
       if (!active(i)) {
         parent[i] = -1;
@@ -121,15 +150,34 @@ struct uf_init_runs_kernel {
     }
   }
 };
-/// Then the vertical unions, one work item per row.
+/// Then the vertical unions, one work item per row.  Host lanes skip a pair (x, y)-(x, y + 1)
+/// whose left neighbours' pair joins and both join it horizontally: it is already connected through
+/// them (a square of joins), so a run lying on a run is united once per block of 16 pixels, not
+/// once per pixel.  The components, and so their roots (each its smallest element), are the same.
 template <class Adjacency>
 struct uf_union_down_kernel {
   Adjacency adj;
   std::int32_t* parent;
-  EDGEPLANE_HD void operator()(std::int64_t row) const {
+  EDGEPLANE_HOST_CLONES EDGEPLANE_HD void operator()(std::int64_t row) const {
     const int y = static_cast<int>(row), w = adj.grid_width();
     const std::int64_t o = static_cast<std::int64_t>(y) * w;
-    for (int x = 0; x < w; ++x)
+    int x = 0;
+    if constexpr (has_join_lanes<Adjacency>) {  // 16 pixels' joins as bits, then the unions needed
+      constexpr int L = 16;
+      if (y + 1 >= adj.grid_height()) return;  // no pixel joins down
+      unsigned carry = 0;  // the previous block's last pixel is a square's left side
+      for (; x + L < w; x += L) {
+        const unsigned down = adj.template down_lanes<L>(x, y);
+        // pixels whose pair, and the pairs to their right on both rows, all join
+        const unsigned square = down & adj.template right_lanes<L>(x, y) & adj.template right_lanes<L>(x, y + 1);
+        for (unsigned u = down & ~((square << 1) | carry); u != 0; u &= u - 1) {
+          const std::int32_t i = static_cast<std::int32_t>(o + x + __builtin_ctz(u));
+          uf_unite(parent, i, i + w);
+        }
+        carry = (square >> (L - 1)) & 1u;
+      }
+    }
+    for (; x < w; ++x)
       if (adj.joins_down(x, y)) uf_unite(parent, static_cast<std::int32_t>(o + x), static_cast<std::int32_t>(o + x + w));
   }
 };
@@ -304,6 +352,27 @@ struct grid4_adjacency {
   EDGEPLANE_HD EDGEPLANE_INLINE bool joins_down(int x, int y) const {
     const std::int64_t i = static_cast<std::int64_t>(y) * depth.width + x;
     return y + 1 < depth.height && active(i) && active(i + depth.width) && compatible(depth(x, y), depth(x, y + 1));
+  }
+  /// Bits l where joins_right(x + l, y) (x + L < width) / joins_down(x + l, y) (x + L <= width,
+  /// y + 1 < height): the same tests and float operations, without branches.
+  template <int L>
+  EDGEPLANE_HD EDGEPLANE_INLINE unsigned right_lanes(int x, int y) const {
+    const std::int64_t i = static_cast<std::int64_t>(y) * depth.width + x;
+    const float* z = &depth(x, y);
+    unsigned bits = 0;
+    for (int l = 0; l < L; ++l)
+      bits |= static_cast<unsigned>(active(i + l) & active(i + l + 1) & compatible(z[l], z[l + 1])) << l;
+    return bits;
+  }
+  template <int L>
+  EDGEPLANE_HD EDGEPLANE_INLINE unsigned down_lanes(int x, int y) const {
+    const std::int64_t i = static_cast<std::int64_t>(y) * depth.width + x;
+    const float* z0 = &depth(x, y);
+    const float* z1 = &depth(x, y + 1);
+    unsigned bits = 0;
+    for (int l = 0; l < L; ++l)
+      bits |= static_cast<unsigned>(active(i + l) & active(i + l + depth.width) & compatible(z0[l], z1[l])) << l;
+    return bits;
   }
   EDGEPLANE_HD int operator()(int x, int y, std::int32_t* a, std::int32_t* b) const {
     return grid4_joins(*this, x, y, a, b);
