@@ -84,16 +84,18 @@ struct line_test {
     const std::ptrdiff_t step = depth.pitch * std::ptrdiff_t(Direction::dy) + Direction::dx;
     const float* const z0 = &depth(x0, y0);
     const int last = len - 2;  // the inner points are 1..last
-    // the points k..k+15 of a block, each beyond `last` replaced by `last`, and their depths
-    const auto gather = [&](int k, int* kl, float* zl) {
-      for (int j = 0; j < lanes; ++j) kl[j] = k + j < last ? k + j : last;
-      for (int j = 0; j < lanes; ++j) zl[j] = z0[kl[j] * step];
+    // point j of the block at k: k + j, or `last` beyond it.  Computed where used, not kept in
+    // an array: g++ writes such an array lane by lane, and the vector read that follows would wait
+    // for those stores.
+    const auto point = [last](int k, int j) { return k + j < last ? k + j : last; };
+    const auto gather = [&](int k, float* zl) {
+      for (int j = 0; j < lanes; ++j) zl[j] = z0[point(k, j) * step];
     };
     const auto excess_at = [&](int k, float z) {
       return excess(proj(x0 + k * Direction::dx, y0 + k * Direction::dy, z), z, a, b, chord_tol);
     };
     if (last < 1) return -1;
-    int kl[lanes], at[lanes] = {};
+    int at[lanes] = {};
     float zl[lanes], most[lanes] = {};
     // A block whose points all lie surely within their tolerance (num < l2 tol^2 (1 - 1e-4), with
     // num = |(p - a) x (b - a)|^2 and l2 = |b - a|^2: then the excess, num / l2 and its square root
@@ -105,11 +107,12 @@ struct line_test {
     const point3 ab = b - a;
     const float l2 = dot(ab, ab);
     for (int k = 1; k <= last; k += lanes) {
-      gather(k, kl, zl);
+      gather(k, zl);
       unsigned doubt = 0;
       for (int j = 0; j < lanes; ++j) {
         const float z = zl[j];
-        const point3 ap = proj(x0 + kl[j] * Direction::dx, y0 + kl[j] * Direction::dy, z) - a;
+        const int kj = point(k, j);
+        const point3 ap = proj(x0 + kj * Direction::dx, y0 + kj * Direction::dy, z) - a;
         const point3 c = cross(ap, ab);
         const float tol = chord_tol + noise_k * sigma(z);
         const float bound = l2 * (tol * tol);
@@ -117,10 +120,11 @@ struct line_test {
       }
       if (!doubt) continue;
       for (int j = 0; j < lanes; ++j) {
-        const float e = excess_at(kl[j], zl[j]);
+        const int kj = point(k, j);
+        const float e = excess_at(kj, zl[j]);
         const bool up = e > most[j];
         most[j] = up ? e : most[j];
-        at[j] = up ? kl[j] : at[j];
+        at[j] = up ? kj : at[j];
       }
     }
     float m = 0.f;
