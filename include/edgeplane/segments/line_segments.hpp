@@ -295,13 +295,17 @@ void extract_segments(const Backend& b, image_view<const float> depth, image_vie
     for (int y = 0; y < covered.height; ++y)
       b.memset(covered.data + static_cast<std::ptrdiff_t>(y) * covered.pitch, 0, static_cast<std::size_t>(covered.width));
   const std::int64_t n = detail::diagonal_count(depth.width, depth.height);
-  if constexpr (Backend::host_accessible) {  // host: L diagonals a work item, at least 64 items where there are
+  // host: L diagonals a work item, keeping 64 work items or more (the CPU backend runs fewer
+  // serially); small images, a diagonal a work item
+  if constexpr (Backend::host_accessible) {
     if (n >= 64 * 16)
       b.for_each_index((n + 15) / 16, detail::diagonal_block_runs_kernel<Direction, 16>{f});
     else if (n >= 64 * 8)
       b.for_each_index((n + 7) / 8, detail::diagonal_block_runs_kernel<Direction, 8>{f});
-    else
+    else if (n >= 64 * 4)
       b.for_each_index((n + 3) / 4, detail::diagonal_block_runs_kernel<Direction, 4>{f});
+    else
+      b.for_each_index(n, f);
   } else {
     b.for_each_index(n, f);
   }
