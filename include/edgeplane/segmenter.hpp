@@ -67,7 +67,9 @@ struct count_roots_kernel {
 /// Each block also lists its roots (elements that are their own parent), in order, at
 /// roots[i0], roots[i0 + 1], ... (i0 = the block's first element), and their number at
 /// nroots[item].  The union-find need not be flattened: the kernel flattens its block (parent[i]
-/// = i's root), as uf_flatten_kernel does.
+/// = i's root), as uf_flatten_kernel does; an element whose parent is the one the previous walk
+/// started from takes that walk's root (the roots are final: no union runs any more), so a
+/// horizontal run linked to its first pixel is walked once, not once per pixel.
 struct count_roots_blocks_kernel {
   std::int32_t* parent;
   std::int32_t* count;
@@ -78,10 +80,15 @@ struct count_roots_blocks_kernel {
   EDGEPLANE_HD void operator()(std::int64_t item) const {
     const std::int64_t i0 = item * block, i1 = i0 + block < n ? i0 + block : n;
     std::int32_t cur = -1, run = 0, listed = 0;
+    std::int32_t walked = -1, walked_root = -1;  // the parent the last walk started from, its root
     for (std::int64_t i = i0; i < i1; ++i) {
       std::int32_t r = atomic_load(parent + i);
       if (r >= 0 && r != cur) {  // (an element of the current root's run is flat already)
-        r = uf_root(parent, static_cast<std::int32_t>(i));
+        if (r != walked) {
+          walked = r;
+          walked_root = uf_root(parent, static_cast<std::int32_t>(i));
+        }
+        r = walked_root;
         atomic_store(parent + i, r);
       }
       if (r != cur) {
@@ -311,7 +318,11 @@ class segmenter {
       // are numbered in order here, writing flags_ and scan_ at the roots only (the only entries
       // anyone reads: every reader indexes them by a flattened parent).  A block's list lies in
       // its own elements, the only ones its roots' entries can overwrite, so it is copied out first.
-      constexpr int block = 1024;
+      // blocks of 1024 elements, halved (to 128 at least) until there are 64 of them: the CPU
+      // backend runs fewer work items serially (a 256x212 frame had 53)
+      constexpr int max_block = 1024;
+      int block = max_block;
+      while (block > 128 && n < 64 * static_cast<std::int64_t>(block)) block /= 2;
       const std::int64_t blocks = (n + block - 1) / block;
       block_roots_.resize(static_cast<std::size_t>(blocks));
       b_.for_each_index(blocks, detail::count_roots_blocks_kernel{parent_.data(), count_.data(), n, block,
@@ -319,7 +330,7 @@ class segmenter {
       std::int32_t* flags = flags_.data();
       std::int32_t* scan = scan_.data();
       const std::int32_t* count = count_.data();
-      std::int32_t k = 0, list[block];
+      std::int32_t k = 0, list[max_block];
       for (std::int64_t blk = 0; blk < blocks; ++blk) {
         const std::int32_t m = block_roots_[static_cast<std::size_t>(blk)];
         std::copy(flags + blk * block, flags + blk * block + m, list);
