@@ -5,6 +5,7 @@
 #include <cstdint>
 
 #include "edgeplane/config.hpp"
+#include "edgeplane/detail/geometry.hpp"
 #include "edgeplane/image.hpp"
 
 namespace edgeplane {
@@ -241,13 +242,16 @@ struct smooth_kernel {
       for (int j = 0; j <= 2 * r; ++j)
         for (int l = 0; l < Lanes; ++l) {
           const float z = row[j + l];
-          // z or +0 (adding +0 leaves a sum of non-negative depths as it is)
+          // z or +0 (adding +0 leaves a sum of non-negative depths as it is), selected by bits:
+          // g++ turns `take ? z : 0.f` into branches for AVX2 and SSE targets (only the AVX-512
+          // clone stayed vector), which made this loop scalar and data-dependent
           const bool take = (z > 0.f) & (fabsf(z - zc[l]) <= tol[l]);
-          sum[l] += take ? z : 0.f;
-          cnt[l] += take ? 1.f : 0.f;
+          sum[l] += select_f(take, z, 0.f);
+          cnt[l] += select_f(take, 1.f, 0.f);
         }
     }
-    for (int l = 0; l < Lanes; ++l) o[l] = (zc[l] > 0.f && cnt[l] > 0.f) ? sum[l] / cnt[l] : 0.f;
+    // an invalid centre, or no tap taken (cnt 0: the division's NaN is not selected), gives 0
+    for (int l = 0; l < Lanes; ++l) o[l] = select_f((zc[l] > 0.f) & (cnt[l] > 0.f), sum[l] / cnt[l], 0.f);
   }
 };
 
