@@ -231,7 +231,7 @@ class segmenter {
            z_proc_.capacity_bytes() + z_smooth_.capacity_bytes() + edges_.capacity_bytes() + mask_.capacity_bytes() + runs_.capacity_bytes() + cov_l_.capacity_bytes() +
            cov_r_.capacity_bytes() + parent_.capacity_bytes() + count_.capacity_bytes() + flags_.capacity_bytes() +
            scan_.capacity_bytes() + cand_.capacity_bytes() + failed_.capacity_bytes() + moments_.capacity_bytes() + bbox_.capacity_bytes() + table_.capacity_bytes() +
-           planes_.capacity_bytes() + tol_.capacity_bytes() + flag_.capacity_bytes() + grow_counts_.capacity_bytes() + lab_a_.capacity_bytes() + lab_b_.capacity_bytes() + lab_c_.capacity_bytes() +
+           planes_.capacity_bytes() + tol_.capacity_bytes() + flag_.capacity_bytes() + grow_counts_.capacity_bytes() + sweep_dirty_.capacity_bytes() + lab_a_.capacity_bytes() + lab_b_.capacity_bytes() + lab_c_.capacity_bytes() +
            lab_full_.capacity_bytes() + origin_.capacity_bytes();
   }
 
@@ -265,6 +265,7 @@ class segmenter {
     tol_.set_backend(b_);
     flag_.set_backend(b_);
     grow_counts_.set_backend(b_);
+    sweep_dirty_.set_backend(b_);
     lab_a_.set_backend(b_);
     lab_b_.set_backend(b_);
     lab_c_.set_backend(b_);
@@ -579,11 +580,14 @@ class segmenter {
     flag_.resize(1);
     b_.memset(flag_.data(), 0, sizeof(std::int32_t));
     if (p_.grow_sweeps) {
+      // rows, then columns: a line is swept again only when the other axis labelled a pixel on it
+      sweep_dirty_.resize(static_cast<std::size_t>(ph_) + pw_);
+      b_.memset(sweep_dirty_.data(), 0xff, sweep_dirty_.size() * sizeof(std::int32_t));
       for (int it = 0; it < p_.grow_iterations && num_planes > 0; ++it) {
         b_.for_each_index(ph_, detail::grow_sweep_kernel<0>{z, la, proj, sigma, p_.grow_k, planes_.data(),
-                                                            tol_.data(), flag_.data()});
+                                                            tol_.data(), flag_.data(), sweep_dirty_.data()});
         b_.for_each_index(pw_, detail::grow_sweep_kernel<1>{z, la, proj, sigma, p_.grow_k, planes_.data(),
-                                                            tol_.data(), flag_.data()});
+                                                            tol_.data(), flag_.data(), sweep_dirty_.data()});
         std::int32_t changed = 0;
         b_.copy_to_host(&changed, flag_.data(), sizeof(std::int32_t));
         if (!changed) break;
@@ -702,7 +706,7 @@ class segmenter {
   buffer<std::int32_t, Backend> bbox_;
   buffer<std::uint16_t, Backend> table_;
   buffer<float, Backend> planes_, tol_;
-  buffer<std::int32_t, Backend> flag_, grow_counts_;
+  buffer<std::int32_t, Backend> flag_, grow_counts_, sweep_dirty_;
   buffer<std::uint16_t, Backend> lab_a_, lab_b_, lab_c_, lab_full_, origin_;
   // host scratch, reused across frames
   std::vector<std::uint64_t> host_moments_, group_moments_;

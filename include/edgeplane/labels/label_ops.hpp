@@ -155,6 +155,17 @@ struct grow_front_kernel {
 /// label's plane.  One sweep carries a label across a whole row, where a round of grow_kernel
 /// moves it one pixel.  Each item reads and writes only its own row or column: race-free, and the
 /// result does not depend on scheduling.
+///
+/// dirty[0, height) flags the rows and dirty[height, height + width) the columns (nonzero: sweep
+/// it).  A line whose flag is 0 is skipped, and a swept line's flag is cleared; every pixel a
+/// sweep labels flags the line of the other axis through it.  Skipping changes nothing: a sweep
+/// reads only its own line's labels and depths, and sweeping a line again when none of them
+/// changed labels nothing (a pixel still unlabelled after both passes would see, in each pass,
+/// the neighbour label it saw before: the neighbour it follows in the forward pass could only
+/// have changed in the backward pass by taking this pixel's label, which stayed 0).  So a round
+/// sweeps only the rows that the previous round's columns labelled pixels in, and the columns
+/// that its own rows did; late rounds, which label a few pixels, sweep a few lines.  All flags
+/// must be nonzero before the first round.
 template <int Axis>
 struct grow_sweep_kernel {
   image_view<const float> depth;
@@ -165,6 +176,7 @@ struct grow_sweep_kernel {
   const float* planes;
   const float* cap;
   std::int32_t* changed;
+  std::int32_t* dirty;  // rows, then columns (see above)
   EDGEPLANE_HD bool try_take(int x, int y, std::uint16_t l) const {
     const float z = depth(x, y);
     if (l == 0 || !(z > 0.f)) return false;
@@ -175,6 +187,10 @@ struct grow_sweep_kernel {
   EDGEPLANE_HD void operator()(std::int64_t i) const {
     const int n = Axis == 0 ? labels.width : labels.height;
     const int line = static_cast<int>(i);
+    std::int32_t* self = dirty + (Axis == 0 ? 0 : labels.height) + line;
+    if (atomic_load(self) == 0) return;  // nothing on it changed since its last sweep
+    atomic_store(self, 0);
+    std::int32_t* crossing = dirty + (Axis == 0 ? labels.height : 0);  // the other axis's flags
     bool any = false;
     for (int pass = 0; pass < 2; ++pass) {
       const int step = pass == 0 ? 1 : -1;
@@ -185,6 +201,7 @@ struct grow_sweep_kernel {
         if (cur == 0 && try_take(x, y, prev)) {
           cur = prev;
           any = true;
+          atomic_store(crossing + t, 1);
         }
         prev = cur;
       }
