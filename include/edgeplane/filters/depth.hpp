@@ -147,10 +147,11 @@ struct downscale_kernel {
   }
 };
 
-/// downscale_kernel by rows (host backends): the same operations without branches (selects over
-/// values computed either way), so that the row loop vectorizes.  The smallest valid depth of each
-/// 2x2 block (a depth that is not > 0, or not below the running minimum, leaves it), then the mean
-/// of the valid depths within 2 % of it, summed in the block's order (a skipped depth adds +0, which
+/// downscale_kernel by rows (host backends): the same operations without branches (selects by
+/// bits over values computed either way: g++ turns `?:` into branches for AVX2), so that the row
+/// loop vectorizes.  The smallest valid depth of each 2x2 block (a depth that is not > 0, or not
+/// below the running minimum, leaves it), then the mean of the valid depths within 2 % of it,
+/// summed in the block's order (a skipped depth adds +0, which
 /// leaves the non-negative sum as it is).
 struct downscale_rows_kernel {
   image_view<const float> in;
@@ -164,20 +165,21 @@ struct downscale_rows_kernel {
     for (int x = 0; x < w; ++x) {
       const float a = r0[2 * x], b = r0[2 * x + 1], c = r1[2 * x], d = r1[2 * x + 1];
       float mn = none;
-      mn = (a > 0.f) & (a < mn) ? a : mn;
-      mn = (b > 0.f) & (b < mn) ? b : mn;
-      mn = (c > 0.f) & (c < mn) ? c : mn;
-      mn = (d > 0.f) & (d < mn) ? d : mn;
+      mn = select_f((a > 0.f) & (a < mn), a, mn);
+      mn = select_f((b > 0.f) & (b < mn), b, mn);
+      mn = select_f((c > 0.f) & (c < mn), c, mn);
+      mn = select_f((d > 0.f) & (d < mn), d, mn);
       const float lim = mn * 1.02f;
       const bool ta = (a > 0.f) & (a <= lim), tb = (b > 0.f) & (b <= lim), tc = (c > 0.f) & (c <= lim),
                  td = (d > 0.f) & (d <= lim);
       float s = 0.f;
-      s += ta ? a : 0.f;
-      s += tb ? b : 0.f;
-      s += tc ? c : 0.f;
-      s += td ? d : 0.f;
-      const float n = (ta ? 1.f : 0.f) + (tb ? 1.f : 0.f) + (tc ? 1.f : 0.f) + (td ? 1.f : 0.f);  // exact
-      o[x] = mn == none ? 0.f : s / n;
+      s += select_f(ta, a, 0.f);
+      s += select_f(tb, b, 0.f);
+      s += select_f(tc, c, 0.f);
+      s += select_f(td, d, 0.f);
+      const float n = select_f(ta, 1.f, 0.f) + select_f(tb, 1.f, 0.f) + select_f(tc, 1.f, 0.f) +
+                      select_f(td, 1.f, 0.f);  // exact
+      o[x] = select_f(mn == none, 0.f, s / n);  // no valid depth: 0 (not the division's NaN)
     }
   }
 };
