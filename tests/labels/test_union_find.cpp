@@ -321,40 +321,45 @@ TEST_CASE_TEMPLATE("eroded_failed_active: a narrow bridge between two parts of a
 TEST_CASE_TEMPLATE("erode_failed: the separable erosion marks exactly the pixels eroded_failed_active names", B,
                    EDGEPLANE_TEST_BACKENDS) {
   // Random rectangles of 6 candidate ids (ids 1, 3 and 5 failed) with sprinkled noise pixels, so
-  // that windows are uniform, cut by other ids, and touch the border.
-  const int w = 157, h = 41;  // more than two of the host's 64-column blocks
-  std::vector<std::int32_t> cand(static_cast<std::size_t>(w) * h, 0);
-  std::uint64_t state = 12345;
-  auto next = [&](int m) {
-    state = state * 6364136223846793005ull + 1442695040888963407ull;
-    return static_cast<int>((state >> 33) % static_cast<std::uint64_t>(m));
-  };
-  for (int k = 0; k < 70; ++k) {
-    const int x0 = next(w), y0 = next(h), x1 = std::min(w, x0 + 3 + next(25)), y1 = std::min(h, y0 + 3 + next(20));
-    const int id = next(7);
-    for (int y = y0; y < y1; ++y)
-      for (int x = x0; x < x1; ++x) cand[static_cast<std::size_t>(y) * w + x] = id;
-  }
-  for (int k = 0; k < 110; ++k) cand[static_cast<std::size_t>(next(h)) * w + next(w)] = next(7);
-  const std::vector<std::uint8_t> failed = {0, 1, 0, 1, 0, 1, 0};
-  for (const B& b : variants<B>()) {
-    CAPTURE(variant_name(b));
-    device_array<std::int32_t, B> c(b, cand);
-    device_array<std::uint8_t, B> f(b, failed), mask(b, cand.size(), 0xAA);
-    for (int r = 0; r <= 4; ++r) {
-      CAPTURE(r);
-      erode_failed(b, c.cview(w, h), f.data(), r, mask.view(w, h));
-      const auto m = mask.host();
-      const detail::eroded_failed_active reference{make_view(static_cast<const std::int32_t*>(cand.data()), w, h),
-                                                   failed.data(), r};
-      int differ = 0, active = 0;
-      for (int i = 0; i < w * h; ++i) {
-        const bool want = reference(i), got = (m[static_cast<std::size_t>(i)] & 2) != 0;
-        differ += want != got ? 1 : 0;
-        active += want ? 1 : 0;
+  // that windows are uniform, cut by other ids, and touch the border.  The widths take the host's
+  // column blocks of 8 (157: a partial last block; 700), 16 (1100) and 64 (4200): the blocks
+  // narrow until there are 64 of them.
+  for (const int w : {157, 700, 1100, 4200}) {
+    CAPTURE(w);
+    const int h = 41;
+    std::vector<std::int32_t> cand(static_cast<std::size_t>(w) * h, 0);
+    std::uint64_t state = 12345;
+    auto next = [&](int m) {
+      state = state * 6364136223846793005ull + 1442695040888963407ull;
+      return static_cast<int>((state >> 33) % static_cast<std::uint64_t>(m));
+    };
+    for (int k = 0; k < 70 * (w / 157 + 1); ++k) {
+      const int x0 = next(w), y0 = next(h), x1 = std::min(w, x0 + 3 + next(25)), y1 = std::min(h, y0 + 3 + next(20));
+      const int id = next(7);
+      for (int y = y0; y < y1; ++y)
+        for (int x = x0; x < x1; ++x) cand[static_cast<std::size_t>(y) * w + x] = id;
+    }
+    for (int k = 0; k < 110 * (w / 157 + 1); ++k) cand[static_cast<std::size_t>(next(h)) * w + next(w)] = next(7);
+    const std::vector<std::uint8_t> failed = {0, 1, 0, 1, 0, 1, 0};
+    for (const B& b : variants<B>()) {
+      CAPTURE(variant_name(b));
+      device_array<std::int32_t, B> c(b, cand);
+      device_array<std::uint8_t, B> f(b, failed), mask(b, cand.size(), 0xAA);
+      for (int r = 0; r <= 4; ++r) {
+        CAPTURE(r);
+        erode_failed(b, c.cview(w, h), f.data(), r, mask.view(w, h));
+        const auto m = mask.host();
+        const detail::eroded_failed_active reference{make_view(static_cast<const std::int32_t*>(cand.data()), w, h),
+                                                     failed.data(), r};
+        int differ = 0, active = 0;
+        for (int i = 0; i < w * h; ++i) {
+          const bool want = reference(i), got = (m[static_cast<std::size_t>(i)] & 2) != 0;
+          differ += want != got ? 1 : 0;
+          active += want ? 1 : 0;
+        }
+        CHECK(differ == 0);
+        CHECK(active > 0);  // not vacuous
       }
-      CHECK(differ == 0);
-      CHECK(active > 0);  // not vacuous
     }
   }
 }
