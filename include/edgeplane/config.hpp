@@ -49,6 +49,11 @@ namespace edgeplane::detail {
 template <class Backend>
 inline constexpr int row_lanes = Backend::host_accessible ? 16 : 1;
 
+/// The CPU backend runs fewer work items than this serially (below it, waking a second thread
+/// costs more than it saves); host kernels that choose their block size keep this many blocks
+/// where the data allows.
+inline constexpr std::int64_t host_parallel_items = 64;
+
 /// f(x, y) for every pixel of row `row`: host backends' work item of for_each_pixel.
 template <class F>
 struct pixel_rows {

@@ -323,7 +323,7 @@ class segmenter {
       // backend runs fewer work items serially (a 256x212 frame had 53)
       constexpr int max_block = 1024;
       int block = max_block;
-      while (block > 128 && n < 64 * static_cast<std::int64_t>(block)) block /= 2;
+      while (block > 128 && n < detail::host_parallel_items * block) block /= 2;
       const std::int64_t blocks = (n + block - 1) / block;
       block_roots_.resize(static_cast<std::size_t>(blocks));
       b_.for_each_index(blocks, detail::count_roots_blocks_kernel{parent_.data(), count_.data(), n, block,

@@ -10,6 +10,7 @@
 #include <numeric>
 
 #include "edgeplane/backend/counting_iterator.hpp"
+#include "edgeplane/config.hpp"
 
 namespace edgeplane {
 
@@ -28,7 +29,7 @@ struct cpu {
   void for_each_index(std::int64_t n, F f) const {
     if (n <= 0) return;
     detail::counting_iterator first(0), last(n);
-    if (execution == mode::serial || n < 64)
+    if (execution == mode::serial || n < detail::host_parallel_items)
       std::for_each(first, last, f);
     else
       std::for_each(std::execution::par, first, last, f);

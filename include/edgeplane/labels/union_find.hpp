@@ -403,12 +403,15 @@ void erode_failed(const Backend& b, image_view<const std::int32_t> cand, const s
   b.for_each_index(cand.height, detail::eroded_rows_kernel{cand, mask, r});
   constexpr int max_block = Backend::host_accessible ? 64 : 1;
   // host: the widest blocks (64, 32, 16 or 8 columns; 8 ids are one AVX2 vector) of which there
-  // are 64, so that a 640-wide frame's 10 blocks of 64 do not run serially (the CPU backend's
-  // threshold); narrower than 8 columns, or still fewer than 64 blocks, stays at 64 (serial,
-  // and wide blocks are cheaper per row)
+  // are host_parallel_items, so that a 640-wide frame's 10 blocks of 64 do not run serially;
+  // where even 8 columns give fewer, blocks of 64 (serial either way, and wide blocks cost less
+  // per row)
   int block = max_block;
-  while (block > 8 && (cand.width + block - 1) / block < 64) block /= 2;
-  if ((cand.width + block - 1) / block < 64) block = max_block;
+  for (int cols = max_block; cols >= 8; cols /= 2)
+    if ((cand.width + cols - 1) / cols >= detail::host_parallel_items) {
+      block = cols;
+      break;
+    }
   b.for_each_index((cand.width + block - 1) / block,
                    detail::eroded_column_blocks_kernel<max_block>{cand, failed, mask, r, block});
 }

@@ -298,11 +298,11 @@ void extract_segments(const Backend& b, image_view<const float> depth, image_vie
   // host: L diagonals a work item, keeping 64 work items or more (the CPU backend runs fewer
   // serially); small images, a diagonal a work item
   if constexpr (Backend::host_accessible) {
-    if (n >= 64 * 16)
+    if (n >= detail::host_parallel_items * 16)
       b.for_each_index((n + 15) / 16, detail::diagonal_block_runs_kernel<Direction, 16>{f});
-    else if (n >= 64 * 8)
+    else if (n >= detail::host_parallel_items * 8)
       b.for_each_index((n + 7) / 8, detail::diagonal_block_runs_kernel<Direction, 8>{f});
-    else if (n >= 64 * 4)
+    else if (n >= detail::host_parallel_items * 4)
       b.for_each_index((n + 3) / 4, detail::diagonal_block_runs_kernel<Direction, 4>{f});
     else
       b.for_each_index(n, f);
