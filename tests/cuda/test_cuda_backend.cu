@@ -161,6 +161,10 @@ TEST_CASE("cuda kernels: filters, edges, segments, candidates and moments are id
   eq::check_kernels_match_cpu(ep::cuda{});
 }
 
+TEST_CASE("cuda kernels: the final-label kernels (sweeps, growth, closing) are identical to the CPU's") {
+  eq::check_label_kernels_match_cpu(ep::cuda{});
+}
+
 // ---- the whole segmenter ---------------------------------------------------------------------------------
 
 TEST_CASE("cuda segmenter: labels and planes equal the CPU segmenter's on the test scenes") {

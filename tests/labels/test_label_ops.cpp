@@ -296,42 +296,129 @@ TEST_CASE_TEMPLATE("grow_sweep_kernel: a round carries a label along whole rows 
                    "off-plane wall",
                    B, EDGEPLANE_TEST_BACKENDS) {
   const int w = 40, h = 10;
-  std::vector<float> depth(static_cast<std::size_t>(w) * h, 2.0f);  // the plane z = 2
-  for (int y = 0; y < h - 1; ++y) depth[at(w, 20, y)] = 2.05f;        // a wall 5 cm off it, open in the last row
-  std::vector<std::uint16_t> labels(depth.size(), 0);
-  labels[at(w, 0, 0)] = 1;
-  const std::vector<float> planes = {0, 0, 0, 0, 0, 0, -1, 2};
-  const std::vector<float> caps = {0.f, 1e9f};
-  const params p = presets::thesis_full();  // tolerance 3 sigma(2 m) = 22.5 mm
-  for (const B& b : variants<B>()) {
-    CAPTURE(variant_name(b));
-    device_array<float, B> z(b, depth), pl(b, planes), cp(b, caps);
-    device_array<std::uint16_t, B> lab(b, labels);
-    device_array<std::int32_t, B> flag(b, 1, 0);
-    device_array<std::int32_t, B> dirty(b, static_cast<std::size_t>(h + w), 1);  // every line swept
-    std::vector<std::int32_t> changed;
-    std::vector<std::vector<std::uint16_t>> after;
-    for (int round = 0; round < 3; ++round) {
-      b.for_each_index(h, detail::grow_sweep_kernel<0>{z.cview(w, h), lab.view(w, h), detail::make_projector(camera(w, h)),
-                                                       detail::make_noise(p.noise), p.grow_k, pl.data(), cp.data(),
-                                                       flag.data(), dirty.data()});
-      b.for_each_index(w, detail::grow_sweep_kernel<1>{z.cview(w, h), lab.view(w, h), detail::make_projector(camera(w, h)),
-                                                       detail::make_noise(p.noise), p.grow_k, pl.data(), cp.data(),
-                                                       flag.data(), dirty.data()});
-      dirty = device_array<std::int32_t, B>(b, static_cast<std::size_t>(h + w), 1);
-      changed.push_back(flag.host()[0]);
-      after.push_back(lab.host());
-      flag = device_array<std::int32_t, B>(b, 1, 0);
-    }
-    CHECK(changed == std::vector<std::int32_t>{1, 1, 0});
-    for (int y = 0; y < h; ++y)
-      for (int x = 0; x < w; ++x) {
-        CAPTURE(x);
-        CAPTURE(y);
-        CHECK(after[0][at(w, x, y)] == (x < 20 ? 1 : 0));            // row 0, then every column left of the wall
-        CHECK(after[1][at(w, x, y)] == (x == 20 && y < h - 1 ? 0 : 1));  // through the gap, then up every column
+  // The frame as drawn below, and turned by 180 degrees (the seed in the last row's last pixel):
+  // then labels travel right to left and bottom to top, which only the backward half of each
+  // sweep does.
+  for (const bool turned : {false, true}) {
+    CAPTURE(turned);
+    const auto at_ = [&](int x, int y) { return turned ? at(w, w - 1 - x, h - 1 - y) : at(w, x, y); };
+    std::vector<float> depth(static_cast<std::size_t>(w) * h, 2.0f);  // the plane z = 2
+    for (int y = 0; y < h - 1; ++y) depth[at_(20, y)] = 2.05f;          // a wall 5 cm off it, open in the last row
+    std::vector<std::uint16_t> labels(depth.size(), 0);
+    labels[at_(0, 0)] = 1;
+    const std::vector<float> planes = {0, 0, 0, 0, 0, 0, -1, 2};
+    const std::vector<float> caps = {0.f, 1e9f};
+    const params p = presets::thesis_full();  // tolerance 3 sigma(2 m) = 22.5 mm
+    for (const B& b : variants<B>()) {
+      CAPTURE(variant_name(b));
+      device_array<float, B> z(b, depth), pl(b, planes), cp(b, caps);
+      device_array<std::uint16_t, B> lab(b, labels);
+      device_array<std::int32_t, B> flag(b, 1, 0);
+      device_array<std::int32_t, B> dirty(b, static_cast<std::size_t>(h + w), 1);  // every line swept
+      std::vector<std::int32_t> changed;
+      std::vector<std::vector<std::uint16_t>> after;
+      for (int round = 0; round < 3; ++round) {
+        b.for_each_index(h, detail::grow_sweep_kernel<0>{z.cview(w, h), lab.view(w, h), detail::make_projector(camera(w, h)),
+                                                         detail::make_noise(p.noise), p.grow_k, pl.data(), cp.data(),
+                                                         flag.data(), dirty.data()});
+        b.for_each_index(w, detail::grow_sweep_kernel<1>{z.cview(w, h), lab.view(w, h), detail::make_projector(camera(w, h)),
+                                                         detail::make_noise(p.noise), p.grow_k, pl.data(), cp.data(),
+                                                         flag.data(), dirty.data()});
+        dirty = device_array<std::int32_t, B>(b, static_cast<std::size_t>(h + w), 1);
+        changed.push_back(flag.host()[0]);
+        after.push_back(lab.host());
+        flag = device_array<std::int32_t, B>(b, 1, 0);
       }
+      CHECK(changed == std::vector<std::int32_t>{1, 1, 0});
+      for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+          CAPTURE(x);
+          CAPTURE(y);
+          CHECK(after[0][at_(x, y)] == (x < 20 ? 1 : 0));            // row 0, then every column left of the wall
+          CHECK(after[1][at_(x, y)] == (x == 20 && y < h - 1 ? 0 : 1));  // through the gap, then up every column
+        }
+    }
   }
+}
+
+namespace {
+// A maze for the sweeps: the planes z = 2 (label 1) and z = 2.1 (label 2) of maze_planes, with a
+// share `holes` of holes (depth 0), 10 % of pixels on z = 2.1 and 5 % off both planes (2.5), and
+// `seeds` seeds at random pixels labelled with their pixel's plane.
+const std::vector<float> maze_planes = {0, 0, 0, 0, 0, 0, -1, 2.0f, 0, 0, -1, 2.1f};
+const std::vector<float> maze_caps = {0.f, 1e9f, 1e9f};
+struct maze {
+  std::vector<float> depth;
+  std::vector<std::uint16_t> labels;
+};
+maze make_maze(lcg_noise& rng, int w, int h, double holes, int seeds) {
+  const std::size_t n = static_cast<std::size_t>(w) * h;
+  maze m{std::vector<float>(n), std::vector<std::uint16_t>(n, 0)};
+  for (std::size_t i = 0; i < n; ++i) {
+    const double u = rng.uniform01();
+    m.depth[i] = u < holes ? 0.f : u < holes + 0.1 ? 2.1f : u < holes + 0.15 ? 2.5f : 2.0f;
+  }
+  for (int s = 0; s < seeds; ++s) {
+    const std::size_t i = rng.next_u32(static_cast<std::uint32_t>(n));
+    m.labels[i] = m.depth[i] == 2.1f ? 2 : 1;
+  }
+  return m;
+}
+
+// Each line of `labels` swept by the host form's pixel-by-pixel walk (visit(), forward then
+// backward) and, in `dev`, by the device form's chunked passes (device_pass<1>, device_pass<-1>).
+template <int Axis>
+void sweep_both_forms(const maze& m, int w, int h, std::vector<std::uint16_t>& host, std::vector<std::uint16_t>& dev,
+                      std::vector<std::int32_t>& host_flags, std::vector<std::int32_t>& dev_flags) {
+  const params p = presets::thesis_full();
+  std::int32_t changed = 0;
+  const auto z = make_view(static_cast<const float*>(m.depth.data()), w, h);
+  const auto kernel = [&](std::vector<std::uint16_t>& labels, std::vector<std::int32_t>& flags) {
+    return detail::grow_sweep_kernel<Axis>{z, make_view(labels.data(), w, h), detail::make_projector(camera(w, h)),
+                                           detail::make_noise(p.noise), p.grow_k, maze_planes.data(),
+                                           maze_caps.data(), &changed, flags.data()};
+  };
+  const auto a = kernel(host, host_flags), d = kernel(dev, dev_flags);
+  const int lines = Axis == 0 ? h : w, len = Axis == 0 ? w : h;
+  std::int32_t* crossing_a = host_flags.data() + (Axis == 0 ? h : 0);
+  std::int32_t* crossing_d = dev_flags.data() + (Axis == 0 ? h : 0);
+  for (int line = 0; line < lines; ++line) {
+    std::uint16_t prev = 0;
+    for (int t = 0; t < len; ++t) a.visit(line, t, prev, crossing_a);
+    prev = 0;
+    for (int t = len - 1; t >= 0; --t) a.visit(line, t, prev, crossing_a);
+    d.template device_pass<1>(line, len, crossing_d);
+    d.template device_pass<-1>(line, len, crossing_d);
+  }
+}
+}  // namespace
+
+// The device form of a sweep (two passes of chunks loaded ahead, grow_sweep_kernel::device_pass)
+// labels and flags exactly what the host form's pixel-by-pixel walk does, on rows and columns of
+// lengths around the chunk size, in mazes with many seeds.
+TEST_CASE("grow_sweep_kernel: the device form's chunked passes equal the host form's walk") {
+  lcg_noise rng(31);
+  long long labelled = 0;
+  for (const auto [w, h] : {std::pair{1, 1}, {7, 3}, {8, 9}, {9, 16}, {17, 23}, {64, 40}, {100, 7}})
+    for (int seed = 0; seed < 4; ++seed) {
+      CAPTURE(w);
+      CAPTURE(h);
+      CAPTURE(seed);
+      const maze m = make_maze(rng, w, h, 0.15, 1 + w * h / 20);
+      for (int axis = 0; axis < 2; ++axis) {
+        CAPTURE(axis);
+        std::vector<std::uint16_t> host = m.labels, dev = m.labels;
+        std::vector<std::int32_t> host_flags(static_cast<std::size_t>(w + h), 0), dev_flags = host_flags;
+        if (axis == 0)
+          sweep_both_forms<0>(m, w, h, host, dev, host_flags, dev_flags);
+        else
+          sweep_both_forms<1>(m, w, h, host, dev, host_flags, dev_flags);
+        CHECK(dev == host);
+        CHECK(dev_flags == host_flags);
+        for (std::size_t i = 0; i < host.size(); ++i) labelled += host[i] != m.labels[i];
+      }
+    }
+  CHECK(labelled > 1000);  // the walks did label pixels
 }
 
 // The segmenter keeps the sweeps' line flags from round to round, so that a line is swept again
@@ -342,8 +429,8 @@ TEST_CASE_TEMPLATE("grow_sweep_kernel: a round carries a label along whole rows 
 TEST_CASE_TEMPLATE("grow_sweep_kernel: sweeping only the lines the other axis labelled gives every round's labels",
                    B, EDGEPLANE_TEST_BACKENDS) {
   const params p = presets::thesis_full();  // tolerance 3 sigma(2 m) = 22.5 mm
-  const std::vector<float> planes = {0, 0, 0, 0, 0, 0, -1, 2.0f, 0, 0, -1, 2.1f};
-  const std::vector<float> caps = {0.f, 1e9f, 1e9f};
+  const std::vector<float>& planes = maze_planes;
+  const std::vector<float>& caps = maze_caps;
   lcg_noise rng(29);
   int deep = 0;  // frames that took more than 3 rounds
   for (const auto [w, h] : {std::pair{1, 1}, {1, 9}, {9, 1}, {7, 5}, {33, 17}, {64, 48}, {50, 50}})
@@ -352,17 +439,9 @@ TEST_CASE_TEMPLATE("grow_sweep_kernel: sweeping only the lines the other axis la
       CAPTURE(h);
       CAPTURE(seed);
       const std::size_t n = static_cast<std::size_t>(w) * h;
-      std::vector<float> depth(n);
-      std::vector<std::uint16_t> labels(n, 0);
-      const double holes = 0.2 + 0.05 * seed;
-      for (std::size_t i = 0; i < n; ++i) {
-        const double u = rng.uniform01();
-        depth[i] = u < holes ? 0.f : u < holes + 0.1 ? 2.1f : u < holes + 0.15 ? 2.5f : 2.0f;
-      }
-      for (int s = 0; s < 1 + static_cast<int>(n / 400); ++s) {
-        const std::size_t i = rng.next_u32(static_cast<std::uint32_t>(n));
-        labels[i] = depth[i] == 2.1f ? 2 : 1;
-      }
+      const maze m = make_maze(rng, w, h, 0.2 + 0.05 * seed, 1 + static_cast<int>(n / 400));
+      const std::vector<float>& depth = m.depth;
+      const std::vector<std::uint16_t>& labels = m.labels;
       for (const B& b : variants<B>()) {
         CAPTURE(variant_name(b));
         device_array<float, B> z(b, depth), pl(b, planes), cp(b, caps);

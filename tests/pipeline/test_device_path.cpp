@@ -32,6 +32,11 @@ TEST_CASE("device paths: filters, edges, segments, candidates and moments are id
   SUBCASE("work items in reverse order") { eq::check_kernels_match_cpu(reversed); }
 }
 
+TEST_CASE("device paths: the final-label kernels (sweeps, growth, closing) are identical to the CPU's") {
+  SUBCASE("concurrent work items") { eq::check_label_kernels_match_cpu(parallel); }
+  SUBCASE("work items in reverse order") { eq::check_label_kernels_match_cpu(reversed); }
+}
+
 TEST_CASE("device paths: the segmenter's labels and planes equal the CPU segmenter's") {
   SUBCASE("concurrent work items") { eq::check_segmenter_matches_cpu(parallel); }
   SUBCASE("work items in reverse order") { eq::check_segmenter_matches_cpu(reversed); }

@@ -4,6 +4,8 @@
 //
 //   check_union_find_matches_cpu(b)    random pair lists: the CPU's parent array exactly
 //   check_kernels_match_cpu(b)         every kernel stage on three scenes x two presets: identical
+//   check_label_kernels_match_cpu(b)   the final-label kernels (sweep and one-pixel growth, label
+//                                      closing), launch by launch: identical
 //   check_segmenter_matches_cpu(b)     the segmenter: labels equal up to renumbering, planes within
 //                                      float tolerance, twice through one segmenter
 //   check_segmenter_inputs_match_cpu(b) float depth, pitched rows, half resolution at odd sizes,
@@ -201,6 +203,103 @@ void check_kernels_match_cpu(const B& b) {
       CHECK(std::count(c.cov_l.begin(), c.cov_l.end(), std::uint8_t(1)) > 10000);
       CHECK(num_gt >= 3);
     }
+}
+
+/// The final-label kernels on b against the CPU backend, launch by launch, on a 512x424 frame of
+/// three planes (noise, 2 % holes) with sparse seeds: rounds of row and column sweeps with their
+/// line flags (labels, flags and `changed` after every launch), rounds of one-pixel growth, and
+/// the label closing.  Seeds lie anywhere on their rows, so labels travel both ways along a line.
+template <class B>
+void check_label_kernels_match_cpu(const B& b) {
+  const int w = 512, h = 424;
+  const ep::intrinsics k{365.5f, 365.5f, 254.9f, 205.4f};
+  const auto proj = ep::detail::make_projector(k);
+  const auto sigma = ep::detail::make_noise(ep::presets::kinect2().noise);
+  // planes n . X + d = 0: a floor (rows below 250), a wall and a slanted face
+  const std::vector<float> planes = {0, 0, 0, 0, 0, -0.8f, -0.6f, 1.5f, 0, 0, -1, 2.5f, 0.6f, 0, -0.8f, 1.8f};
+  const std::vector<float> caps = {0.f, 0.02f, 0.02f, 0.02f};
+  std::vector<float> z(static_cast<std::size_t>(w) * h);
+  std::vector<std::uint16_t> seeds(z.size(), 0);
+  lcg_noise rng(77);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const int l = y > 250 ? 1 : (x < 300 ? 2 : 3);
+      const float* q = &planes[4 * static_cast<std::size_t>(l)];
+      const float den = q[0] * (x - k.cx) / k.fx + q[1] * (y - k.cy) / k.fy + q[2];
+      float d = den != 0.f ? -q[3] / den : 0.f;
+      if (!(d > 0.3f && d < 8.f)) d = 0.f;
+      d += static_cast<float>(rng.uniform01() - 0.5) * 0.02f;
+      const std::size_t i = static_cast<std::size_t>(y) * w + x;
+      z[i] = rng.uniform01() < 0.02 ? 0.f : d;
+      if (rng.uniform01() < 0.01) seeds[i] = static_cast<std::uint16_t>(l);
+    }
+  const ep::cpu c{};
+  device_array<float, ep::cpu> cz(c, z), cpl(c, planes), ccap(c, caps);
+  device_array<float, B> gz(b, z), gpl(b, planes), gcap(b, caps);
+  SUBCASE("sweeps with line flags") {
+    device_array<std::uint16_t, ep::cpu> cl(c, seeds);
+    device_array<std::uint16_t, B> gl(b, seeds);
+    device_array<std::int32_t, ep::cpu> cdirty(c, static_cast<std::size_t>(w + h), -1), cflag(c, 1, 0);
+    device_array<std::int32_t, B> gdirty(b, static_cast<std::size_t>(w + h), -1), gflag(b, 1, 0);
+    int rounds = 0;
+    for (bool more = true; more && rounds < 64; ++rounds) {
+      for (int axis = 0; axis < 2; ++axis) {
+        CAPTURE(rounds);
+        CAPTURE(axis);
+        const auto before = cl.host();
+        if (axis == 0) {
+          c.for_each_index(h, ep::detail::grow_sweep_kernel<0>{cz.cview(w, h), cl.view(w, h), proj, sigma, 3.f,
+                                                               cpl.data(), ccap.data(), cflag.data(), cdirty.data()});
+          b.for_each_index(h, ep::detail::grow_sweep_kernel<0>{gz.cview(w, h), gl.view(w, h), proj, sigma, 3.f,
+                                                               gpl.data(), gcap.data(), gflag.data(), gdirty.data()});
+        } else {
+          c.for_each_index(w, ep::detail::grow_sweep_kernel<1>{cz.cview(w, h), cl.view(w, h), proj, sigma, 3.f,
+                                                               cpl.data(), ccap.data(), cflag.data(), cdirty.data()});
+          b.for_each_index(w, ep::detail::grow_sweep_kernel<1>{gz.cview(w, h), gl.view(w, h), proj, sigma, 3.f,
+                                                               gpl.data(), gcap.data(), gflag.data(), gdirty.data()});
+        }
+        const auto after = cl.host();
+        if (rounds == 0) CHECK(differing(after, before) > 10000);  // the first sweeps label a lot
+        REQUIRE(differing(gl.host(), after) == 0);
+        REQUIRE(differing(gdirty.host(), cdirty.host()) == 0);
+      }
+      REQUIRE(gflag.host() == cflag.host());
+      more = cflag.host()[0] != 0;
+      cflag = device_array<std::int32_t, ep::cpu>(c, 1, 0);
+      gflag = device_array<std::int32_t, B>(b, 1, 0);
+    }
+    CHECK(rounds >= 2);
+    CHECK(rounds < 64);
+  }
+  SUBCASE("one-pixel growth rounds and the label closing") {
+    device_array<std::uint16_t, ep::cpu> ca(c, seeds), cb(c, seeds.size(), 0), cc(c, seeds.size(), 0);
+    device_array<std::uint16_t, B> ga(b, seeds), gb(b, seeds.size(), 0), gc(b, seeds.size(), 0);
+    device_array<std::int32_t, ep::cpu> cflag(c, 1, 0);
+    device_array<std::int32_t, B> gflag(b, 1, 0);
+    for (int round = 0; round < 6; ++round) {
+      CAPTURE(round);
+      const bool even = round % 2 == 0;
+      ep::detail::for_each_pixel(c, w, h,
+                                 ep::detail::grow_kernel{cz.cview(w, h), (even ? ca : cb).cview(w, h),
+                                                         (even ? cb : ca).view(w, h), proj, sigma, 3.f, cpl.data(),
+                                                         ccap.data(), cflag.data()});
+      ep::detail::for_each_pixel(b, w, h,
+                                 ep::detail::grow_kernel{gz.cview(w, h), (even ? ga : gb).cview(w, h),
+                                                         (even ? gb : ga).view(w, h), proj, sigma, 3.f, gpl.data(),
+                                                         gcap.data(), gflag.data()});
+      REQUIRE(differing(gb.host(), cb.host()) == 0);
+      REQUIRE(differing(ga.host(), ca.host()) == 0);
+    }
+    CHECK(gflag.host() == cflag.host());
+    CHECK(differing(ca.host(), seeds) > 10000);
+    for (const int r : {1, 2}) {
+      CAPTURE(r);
+      ep::close_labels(c, ca.cview(w, h), cb.view(w, h), cc.view(w, h), r);
+      ep::close_labels(b, ga.cview(w, h), gb.view(w, h), gc.view(w, h), r);
+      CHECK(differing(gc.host(), cc.host()) == 0);
+      CHECK(differing(cc.host(), ca.host()) > 0);  // the closing filled something
+    }
+  }
 }
 
 // ---- the segmenter on one backend ----------------------------------------------------------------

@@ -117,6 +117,28 @@ struct interior_columns_kernel {
   }
 };
 
+/// Interior pass on device backends, one work item per pixel: interior_flag where the (2r+1)^2
+/// window lies inside the image and holds only valid depth, else 0 (the row and column passes'
+/// interior_flag, without their row flags, which nothing reads).  Reads depth only, so the work
+/// items are independent; the window is read row by row and stops at the first invalid pixel.
+/// (The row and column passes walk a whole line per work item: a GPU ran them on a few hundred
+/// threads, 0.9 ms at 512x424 on an H200.)
+struct interior_pixel_kernel {
+  image_view<const float> depth;
+  image_view<std::uint8_t> flags;
+  int r;
+  EDGEPLANE_HD void operator()(int x, int y) const {
+    bool inside = x >= r && y >= r && x + r < depth.width && y + r < depth.height;
+    for (int dy = -r; dy <= r && inside; ++dy)
+      for (int dx = -r; dx <= r; ++dx)
+        if (!(depth(x + dx, y + dy) > 0.f)) {
+          inside = false;
+          break;
+        }
+    flags(x, y) = inside ? interior_flag : std::uint8_t(0);
+  }
+};
+
 /// The edge pass's point planes on host backends: depth, X and Y of every pixel (floats, in that
 /// order), each a dense w-wide image with pad_rows rows of zeros above and below, as many as a
 /// run's neighbours r steps of up to w + 1 elements away can reach: r + ceil(r / w).
@@ -795,8 +817,7 @@ void detect_edges(const Backend& b, image_view<const float> depth, const intrins
     px.points = points;
     px.points_at = points_at;
   } else {
-    b.for_each_index(h, detail::interior_rows_kernel{depth, edges, reach});
-    b.for_each_index(w, detail::interior_columns_kernel{edges, reach});
+    detail::for_each_pixel(b, w, h, detail::interior_pixel_kernel{depth, edges, reach});
   }
   detail::for_each_pixel_run<detail::all_edges_rows_kernel>(b, w, h, px);
 }

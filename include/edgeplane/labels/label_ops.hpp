@@ -177,12 +177,25 @@ struct grow_sweep_kernel {
   const float* cap;
   std::int32_t* changed;
   std::int32_t* dirty;  // rows, then columns (see above)
-  EDGEPLANE_HD bool try_take(int x, int y, std::uint16_t l) const {
-    const float z = depth(x, y);
+  EDGEPLANE_HD bool try_take(int x, int y, std::uint16_t l) const { return take_at(x, y, depth(x, y), l); }
+  EDGEPLANE_HD EDGEPLANE_INLINE bool take_at(int x, int y, float z, std::uint16_t l) const {
     if (l == 0 || !(z > 0.f)) return false;
     const point3 p = proj(x, y, z);
     const float d = plane_distance(planes, l, p);
     return d <= k * sigma(z) && d <= cap[l];
+  }
+  /// Pixel t of the line: takes `prev` if it may; `prev` becomes its label.  True if it took one.
+  EDGEPLANE_HD EDGEPLANE_INLINE bool visit(int line, int t, std::uint16_t& prev, std::int32_t* crossing) const {
+    const int x = Axis == 0 ? t : line, y = Axis == 0 ? line : t;
+    std::uint16_t cur = labels(x, y);
+    const bool took = cur == 0 && try_take(x, y, prev);
+    if (took) {
+      cur = prev;
+      labels(x, y) = cur;
+      atomic_store(crossing + t, 1);
+    }
+    prev = cur;
+    return took;
   }
   EDGEPLANE_HD void operator()(std::int64_t i) const {
     const int n = Axis == 0 ? labels.width : labels.height;
@@ -191,22 +204,59 @@ struct grow_sweep_kernel {
     if (atomic_load(self) == 0) return;  // nothing on it changed since its last sweep
     atomic_store(self, 0);
     std::int32_t* crossing = dirty + (Axis == 0 ? labels.height : 0);  // the other axis's flags
+    // Two loops, forward then backward.  Not one loop over a direction variable
+    // (for (t = pass ? n - 1 : 0; t >= 0 && t < n; t += step)): nvcc 13.0 compiled that form so
+    // that the backward pass never ran on an H200 (the labels equalled a forward-only sweep's), a
+    // difference from the CPU backend that tests/cuda caught.
     bool any = false;
-    for (int pass = 0; pass < 2; ++pass) {
-      const int step = pass == 0 ? 1 : -1;
-      std::uint16_t prev = 0;
-      for (int t = pass == 0 ? 0 : n - 1; t >= 0 && t < n; t += step) {
+#if defined(__CUDA_ARCH__)
+    // Device: the line in chunks whose depths and labels are loaded together before the walk
+    // through them, so that a thread waits for memory once a chunk rather than once a pixel (this
+    // thread alone writes the line, so the values it loaded stay current but for its own writes,
+    // which the walk carries in lab[]).
+    any = device_pass<1>(line, n, crossing);
+    any |= device_pass<-1>(line, n, crossing);
+#else
+    std::uint16_t prev = 0;
+    for (int t = 0; t < n; ++t) any |= visit(line, t, prev, crossing);
+    prev = 0;
+    for (int t = n - 1; t >= 0; --t) any |= visit(line, t, prev, crossing);
+#endif
+    if (any) atomic_store(changed, 1);
+  }
+  /// One pass of the walk (Step 1: forward, -1: backward), chunk by chunk; the labels it writes
+  /// and the flags it sets are visit()'s, pixel for pixel (host-callable, for the tests).
+  template <int Step>
+  EDGEPLANE_HD bool device_pass(int line, int n, std::int32_t* crossing) const {
+    constexpr int chunk = 8;
+    bool any = false;
+    std::uint16_t prev = 0;
+    for (int c = 0; c < n; c += chunk) {
+      float z[chunk];
+      std::uint16_t lab[chunk];
+      const int m = n - c < chunk ? n - c : chunk;
+#pragma unroll
+      for (int j = 0; j < chunk; ++j) {
+        const int t = Step > 0 ? c + j : n - 1 - c - j;
         const int x = Axis == 0 ? t : line, y = Axis == 0 ? line : t;
-        std::uint16_t& cur = labels(x, y);
-        if (cur == 0 && try_take(x, y, prev)) {
-          cur = prev;
-          any = true;
+        z[j] = j < m ? depth(x, y) : 0.f;
+        lab[j] = j < m ? labels(x, y) : std::uint16_t(0);
+      }
+#pragma unroll
+      for (int j = 0; j < chunk; ++j) {
+        if (j >= m) break;
+        const int t = Step > 0 ? c + j : n - 1 - c - j;
+        const int x = Axis == 0 ? t : line, y = Axis == 0 ? line : t;
+        if (lab[j] == 0 && take_at(x, y, z[j], prev)) {
+          lab[j] = prev;
+          labels(x, y) = prev;
           atomic_store(crossing + t, 1);
+          any = true;
         }
-        prev = cur;
+        prev = lab[j];
       }
     }
-    if (any) atomic_store(changed, 1);
+    return any;
   }
 };
 

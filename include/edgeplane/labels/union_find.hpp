@@ -259,9 +259,9 @@ struct eroded_rows_kernel {
 };
 /// Columns, one work item per block of `block` (<= MaxBlock) columns walked down together row by
 /// row: bit 1 on the pixels of failed candidates whose 2r + 1 rows of windows are all uniform with
-/// the same value, i.e. whose (2r+1)^2 window is one candidate.  Host backends take blocks of 64
-/// (rows are contiguous in memory; a single column's walk touches a cache line per pixel), device
-/// backends a column per thread (MaxBlock = block = 1).
+/// the same value, i.e. whose (2r+1)^2 window is one candidate.  Host backends take blocks of up
+/// to 64 (rows are contiguous in memory; a single column's walk touches a cache line per pixel);
+/// device backends use eroded_pixel_kernel instead.
 template <int MaxBlock>
 struct eroded_column_blocks_kernel {
   image_view<const std::int32_t> cand;
@@ -293,6 +293,19 @@ struct eroded_column_blocks_kernel {
           if (c > 0 && failed[c]) mo[x] = static_cast<std::uint8_t>(mo[x] | 2);
         }
     }
+  }
+};
+
+/// erode_failed on device backends, one work item per pixel: bit 1 (value 2) where
+/// eroded_failed_active holds, else 0 (the separable passes' bit 0 is their scratch, which nothing
+/// reads).  The window is read only for pixels of failed candidates and stops at the first pixel
+/// that differs.  (The separable passes walk a row or a column per work item: on a GPU a few
+/// hundred threads, 0.2 ms a call at 512x424 on an H200.)
+struct eroded_pixel_kernel {
+  eroded_failed_active eroded;
+  image_view<std::uint8_t> mask;
+  EDGEPLANE_HD void operator()(int x, int y) const {
+    mask(x, y) = eroded(static_cast<std::int64_t>(y) * eroded.cand.width + x) ? std::uint8_t(2) : std::uint8_t(0);
   }
 };
 
@@ -394,14 +407,20 @@ struct pair_list_adjacency {
 
 /// Marks (bit 1 of `mask`, a byte image of cand's size in the backend's memory) the pixels that
 /// detail::eroded_failed_active(cand, failed, r) names: pixels of failed candidates whose whole
-/// (2r+1)^2 window lies in the same candidate.  Two passes, O(1) per pixel for any r.
-/// Asynchronous on device backends.
+/// (2r+1)^2 window lies in the same candidate.  Host backends: two passes, O(1) per pixel for any
+/// r; device backends: a work item per pixel (detail::eroded_pixel_kernel).  Asynchronous on
+/// device backends.
 template <class Backend>
 void erode_failed(const Backend& b, image_view<const std::int32_t> cand, const std::uint8_t* failed, int r,
                   image_view<std::uint8_t> mask) {
   detail::check_same_size(cand, mask, "candidates", "mask");
+  if constexpr (!Backend::host_accessible) {
+    detail::for_each_pixel(b, cand.width, cand.height,
+                           detail::eroded_pixel_kernel{detail::eroded_failed_active{cand, failed, r}, mask});
+    return;
+  }
   b.for_each_index(cand.height, detail::eroded_rows_kernel{cand, mask, r});
-  constexpr int max_block = Backend::host_accessible ? 64 : 1;
+  constexpr int max_block = 64;
   // host: the widest blocks (64, 32, 16 or 8 columns; 8 ids are one AVX2 vector) of which there
   // are host_parallel_items, so that a 640-wide frame's 10 blocks of 64 do not run serially;
   // where even 8 columns give fewer, blocks of 64 (serial either way, and wide blocks cost less

@@ -215,6 +215,28 @@ struct diagonal_runs_kernel {
   }
 };
 
+/// The device walk: one work item per pixel, which does something only where a run starts (a
+/// pixel off the mask whose predecessor along the diagonal is on the mask or outside the image):
+/// it finds the run's end and processes the run.  The same runs as diagonal_runs_kernel's walk, so
+/// the same covered pixels (runs do not overlap, and each writes only its own pixels), with as many
+/// work items in flight as there are runs rather than diagonals: a GPU walking one diagonal per
+/// thread kept a few hundred threads busy, each for a whole diagonal (2.2 ms a pass at 512x424 on
+/// an H200).
+template <class Direction>
+struct run_starts_kernel {
+  diagonal_runs_kernel<Direction, false> walk;
+  EDGEPLANE_HD void operator()(int x, int y) const {
+    if (walk.mask(x, y) != 0) return;
+    const int px = x - Direction::dx, py = y - Direction::dy;
+    if (walk.depth.contains(px, py) && walk.mask(px, py) == 0) return;  // not the run's first pixel
+    int len = 1;
+    for (int cx = x + Direction::dx, cy = y + Direction::dy; walk.depth.contains(cx, cy) && walk.mask(cx, cy) == 0;
+         cx += Direction::dx, cy += Direction::dy)
+      ++len;
+    walk.process(x, y, len);
+  }
+};
+
 /// The host walk: one work item walks L adjacent diagonals together, row by row, so that each row
 /// step reads the L lanes' mask bytes from one place (lane j of diagonal k0 + j lies at column
 /// xb(y) + j of row y) instead of one cache line per pixel and diagonal, and finds the lanes whose
@@ -307,7 +329,8 @@ void extract_segments(const Backend& b, image_view<const float> depth, image_vie
     else
       b.for_each_index(n, f);
   } else {
-    b.for_each_index(n, f);
+    // device: a work item per pixel, the runs processed in parallel (run_starts_kernel)
+    detail::for_each_pixel(b, depth.width, depth.height, detail::run_starts_kernel<Direction>{f});
   }
 }
 
