@@ -1,9 +1,11 @@
 // CUDA benchmarks: the whole pipeline (segmenter<cuda>, host depth in, host labels out, as an
 // application calls it) and the fused edge pass alone, on the room scene of bench_cpu.cpp (a box on
 // the floor in a room corner, Kinect-v2-like noise and 2 % pepper holes) at 256x212, 512x424 and
-// 640x480.  Manual timing: the pipeline's segment() returns only when its labels are on the host
-// (it synchronizes), so a host clock around it is honest; the edge pass is timed with CUDA events
-// on the stream.  Without a CUDA device the program says so and exits 0 without running anything.
+// 640x480 (the edge pass also at 4096x3392, with a device-to-device copy of as many bytes as its
+// floor).  Manual timing: the pipeline's segment() returns only when its labels are on the host
+// (it synchronizes), so a host clock around it is honest; the edge pass and the copy are timed
+// with CUDA events on the stream.  Without a CUDA device the program says so and exits 0 without
+// running anything.
 #include <benchmark/benchmark.h>
 
 #include <chrono>
@@ -94,13 +96,44 @@ void edges_fused(benchmark::State& st) {
     st.SetIterationTime(ms / 1000.0);
   }
   ep::bench::per_pixel_counters(st, w, h);
+  // the bytes the pass must move at least: each depth value read once, each edge byte written once
+  st.counters["bytes_per_second"] = benchmark::Counter(5.0 * w * h, benchmark::Counter::kIsIterationInvariantRate);
+}
+
+/// The floor for edges_fused: a device-to-device copy of 2.5 bytes per pixel, which reads and
+/// writes as many bytes (5 per pixel) as the edge pass must, timed the same way.
+void device_copy(benchmark::State& st) {
+  const std::int64_t n = st.range(0) * st.range(1);
+  cuda_timing t;
+  const ep::cuda b{t.stream};
+  const std::size_t bytes = static_cast<std::size_t>(n) * 5 / 2;
+  ep::buffer<std::uint8_t, ep::cuda> src(b), dst(b);
+  src.resize(bytes);
+  dst.resize(bytes);
+  b.memset(src.data(), 7, bytes);
+  b.copy(dst.data(), src.data(), bytes);  // warm-up
+  b.synchronize();
+  for (auto _ : st) {
+    ep::detail::cuda_check(cudaEventRecord(t.start, t.stream), "cudaEventRecord");
+    b.copy(dst.data(), src.data(), bytes);
+    ep::detail::cuda_check(cudaEventRecord(t.stop, t.stream), "cudaEventRecord");
+    ep::detail::cuda_check(cudaEventSynchronize(t.stop), "cudaEventSynchronize");
+    float ms = 0.f;
+    ep::detail::cuda_check(cudaEventElapsedTime(&ms, t.start, t.stop), "cudaEventElapsedTime");
+    st.SetIterationTime(ms / 1000.0);
+  }
+  st.counters["bytes_per_second"] = benchmark::Counter(2.0 * static_cast<double>(bytes),
+                                                       benchmark::Counter::kIsIterationInvariantRate);
 }
 
 #define EDGEPLANE_SIZES Args({256, 212})->Args({512, 424})->Args({640, 480})
 BENCHMARK_CAPTURE(pipeline, thesis_full, "thesis_full")->EDGEPLANE_SIZES->Unit(benchmark::kMillisecond)->UseManualTime();
 BENCHMARK_CAPTURE(pipeline, thesis_half, "thesis_half")->EDGEPLANE_SIZES->Unit(benchmark::kMillisecond)->UseManualTime();
 BENCHMARK_CAPTURE(pipeline, kinect2, "kinect2")->EDGEPLANE_SIZES->Unit(benchmark::kMillisecond)->UseManualTime();
-BENCHMARK(edges_fused)->EDGEPLANE_SIZES->Unit(benchmark::kMillisecond)->UseManualTime();
+// 4096x3392 (8x a Kinect v2 frame each way): the edge pass and its copy floor where the launch
+// overhead (a few microseconds) no longer hides the memory traffic.
+BENCHMARK(edges_fused)->EDGEPLANE_SIZES->Args({4096, 3392})->Unit(benchmark::kMillisecond)->UseManualTime();
+BENCHMARK(device_copy)->EDGEPLANE_SIZES->Args({4096, 3392})->Unit(benchmark::kMillisecond)->UseManualTime();
 }  // namespace
 
 int main(int argc, char** argv) {
