@@ -225,33 +225,51 @@ struct grow_sweep_kernel {
     if (any) atomic_store(changed, 1);
   }
   /// One pass of the walk (Step 1: forward, -1: backward), chunk by chunk; the labels it writes
-  /// and the flags it sets are visit()'s, pixel for pixel (host-callable, for the tests).
+  /// and the flags it sets are visit()'s, pixel for pixel (host-callable, for the tests).  What a
+  /// pixel's test needs that does not depend on the label it is offered (its point and its
+  /// tolerance k sigma(z)) is computed as its chunk is loaded, and the plane and cap of the label
+  /// being carried are held in registers until the label changes, so that the walk's chain from
+  /// one pixel to the next is only the distance to that plane and two comparisons.  The float
+  /// operations are take_at()'s, in its order.
   template <int Step>
   EDGEPLANE_HD bool device_pass(int line, int n, std::int32_t* crossing) const {
     constexpr int chunk = 8;
     bool any = false;
-    std::uint16_t prev = 0;
+    std::uint16_t prev = 0, held = 0;  // held: the label whose plane and cap are in q, q_cap
+    float q[4] = {0.f, 0.f, 0.f, 0.f}, q_cap = 0.f;
     for (int c = 0; c < n; c += chunk) {
-      float z[chunk];
+      point3 pt[chunk];
+      float tol[chunk];
+      bool valid[chunk];
       std::uint16_t lab[chunk];
       const int m = n - c < chunk ? n - c : chunk;
 #pragma unroll
       for (int j = 0; j < chunk; ++j) {
         const int t = Step > 0 ? c + j : n - 1 - c - j;
         const int x = Axis == 0 ? t : line, y = Axis == 0 ? line : t;
-        z[j] = j < m ? depth(x, y) : 0.f;
+        const float z = j < m ? depth(x, y) : 0.f;
         lab[j] = j < m ? labels(x, y) : std::uint16_t(0);
+        valid[j] = z > 0.f;
+        pt[j] = proj(x, y, z);
+        tol[j] = k * sigma(z);
       }
 #pragma unroll
       for (int j = 0; j < chunk; ++j) {
         if (j >= m) break;
-        const int t = Step > 0 ? c + j : n - 1 - c - j;
-        const int x = Axis == 0 ? t : line, y = Axis == 0 ? line : t;
-        if (lab[j] == 0 && take_at(x, y, z[j], prev)) {
-          lab[j] = prev;
-          labels(x, y) = prev;
-          atomic_store(crossing + t, 1);
-          any = true;
+        if (lab[j] == 0 && prev != 0 && valid[j]) {
+          if (prev != held) {
+            held = prev;
+            for (int i = 0; i < 4; ++i) q[i] = planes[4 * held + i];
+            q_cap = cap[held];
+          }
+          const float d = plane_distance(q, 0, pt[j]);
+          if (d <= tol[j] && d <= q_cap) {
+            const int t = Step > 0 ? c + j : n - 1 - c - j;
+            lab[j] = prev;
+            labels(Axis == 0 ? t : line, Axis == 0 ? line : t) = prev;
+            atomic_store(crossing + t, 1);
+            any = true;
+          }
         }
         prev = lab[j];
       }
