@@ -20,6 +20,15 @@
 #define EDGEPLANE_INLINE inline
 #endif
 
+// Unrolls the loop that follows in device code (which keeps small per-thread arrays in registers
+// only when every index is a constant); nothing in host code, whose compilers (nvcc's host pass
+// included) would warn about an unknown pragma.
+#if defined(__CUDA_ARCH__)
+#define EDGEPLANE_UNROLL _Pragma("unroll")
+#else
+#define EDGEPLANE_UNROLL
+#endif
+
 // Host kernels whose inner loops are SIMD over pixels (the edge pass, smoothing, the depth
 // closing, moments, growth, the failed-candidate erosion) are compiled three times on x86-64 ELF
 // systems, for x86-64-v4 (AVX-512), x86-64-v3 (AVX2) and the baseline, and the loader picks the

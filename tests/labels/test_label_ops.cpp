@@ -399,7 +399,7 @@ void sweep_both_forms(const maze& m, int w, int h, std::vector<std::uint16_t>& h
 TEST_CASE("grow_sweep_kernel: the device form's chunked passes equal the host form's walk") {
   lcg_noise rng(31);
   long long labelled = 0;
-  for (const auto [w, h] : {std::pair{1, 1}, {7, 3}, {8, 9}, {9, 16}, {17, 23}, {64, 40}, {100, 7}})
+  for (const auto& [w, h] : {std::pair{1, 1}, {7, 3}, {8, 9}, {9, 16}, {17, 23}, {64, 40}, {100, 7}})
     for (int seed = 0; seed < 4; ++seed) {
       CAPTURE(w);
       CAPTURE(h);
@@ -433,7 +433,7 @@ TEST_CASE_TEMPLATE("grow_sweep_kernel: sweeping only the lines the other axis la
   const std::vector<float>& caps = maze_caps;
   lcg_noise rng(29);
   int deep = 0;  // frames that took more than 3 rounds
-  for (const auto [w, h] : {std::pair{1, 1}, {1, 9}, {9, 1}, {7, 5}, {33, 17}, {64, 48}, {50, 50}})
+  for (const auto& [w, h] : {std::pair{1, 1}, {1, 9}, {9, 1}, {7, 5}, {33, 17}, {64, 48}, {50, 50}})
     for (int seed = 0; seed < 6; ++seed) {
       CAPTURE(w);
       CAPTURE(h);

@@ -243,7 +243,7 @@ struct grow_sweep_kernel {
       bool valid[chunk];
       std::uint16_t lab[chunk];
       const int m = n - c < chunk ? n - c : chunk;
-#pragma unroll
+EDGEPLANE_UNROLL
       for (int j = 0; j < chunk; ++j) {
         const int t = Step > 0 ? c + j : n - 1 - c - j;
         const int x = Axis == 0 ? t : line, y = Axis == 0 ? line : t;
@@ -253,7 +253,7 @@ struct grow_sweep_kernel {
         pt[j] = proj(x, y, z);
         tol[j] = k * sigma(z);
       }
-#pragma unroll
+EDGEPLANE_UNROLL
       for (int j = 0; j < chunk; ++j) {
         if (j >= m) break;
         if (lab[j] == 0 && prev != 0 && valid[j]) {
