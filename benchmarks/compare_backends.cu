@@ -130,14 +130,6 @@ double ms_between(clk::time_point a, clk::time_point b) {
   return std::chrono::duration<double, std::milli>(b - a).count();
 }
 
-struct device_memory {
-  void* p = nullptr;
-  explicit device_memory(std::size_t bytes) { ep::detail::cuda_check(cudaMalloc(&p, bytes), "cudaMalloc"); }
-  ~device_memory() { (void)cudaFree(p); }
-  device_memory(const device_memory&) = delete;
-  device_memory& operator=(const device_memory&) = delete;
-};
-
 /// Largest difference between matched planes (labels matched through `corr`, g id -> c id);
 /// `count_mismatch` counts planes whose pixel count or box differ or that have no partner.
 double plane_difference(const ep::segmentation_result& c, const ep::segmentation_result& g,
@@ -174,7 +166,23 @@ struct stage_medians {
     merge.push_back(t.merge);
     fin.push_back(t.finalize);
   }
+  /// Each stage's median; total = their sum.
+  ep::stage_times medians() const {
+    ep::stage_times m;
+    m.preprocess = median(pre);
+    m.edges = median(edges);
+    m.segments = median(seg);
+    m.candidates = median(cand);
+    m.validation = median(val);
+    m.merge = median(merge);
+    m.finalize = median(fin);
+    m.total = m.preprocess + m.edges + m.segments + m.candidates + m.validation + m.merge + m.finalize;
+    return m;
+  }
 };
+
+/// The group a frame's figures are summarised in: its size and preset.
+std::string group_of(const frame& f) { return std::to_string(f.w) + "x" + std::to_string(f.h) + " " + f.preset; }
 
 }  // namespace
 
@@ -265,11 +273,13 @@ int main(int argc, char** argv) {
     }
     // device-resident depth and labels: no frame crosses the bus
     const std::size_t n = f.depth.size();
-    device_memory dd(n * sizeof(std::uint16_t)), dl(n * sizeof(std::uint16_t));
-    ep::detail::cuda_check(cudaMemcpy(dd.p, f.depth.data(), n * sizeof(std::uint16_t), cudaMemcpyHostToDevice),
-                           "cudaMemcpy");
-    const auto ddv = ep::make_view<const std::uint16_t>(static_cast<const std::uint16_t*>(dd.p), f.w, f.h);
-    const auto dlv = ep::make_view(static_cast<std::uint16_t*>(dl.p), f.w, f.h);
+    const ep::cuda dev{stream};
+    ep::buffer<std::uint16_t, ep::cuda> dd(dev), dl(dev);
+    dd.resize(n);
+    dl.resize(n);
+    dev.copy_from_host(dd.data(), f.depth.data(), n * sizeof(std::uint16_t));
+    const auto ddv = ep::make_view<const std::uint16_t>(dd.data(), f.w, f.h);
+    const auto dlv = ep::make_view(dl.data(), f.w, f.h);
     gs.segment_on_backend(ddv, f.scale, f.k, dlv, rg);  // warm-up
     for (int i = 0; i < repeat; ++i) {
       const auto t0 = clk::now();
@@ -277,41 +287,33 @@ int main(int argc, char** argv) {
       td.push_back(ms_between(t0, clk::now()));
     }
     std::vector<std::uint16_t> ld(n);
-    ep::detail::cuda_check(cudaMemcpy(ld.data(), dl.p, n * sizeof(std::uint16_t), cudaMemcpyDeviceToHost),
-                           "cudaMemcpy");
+    dev.copy_to_host(ld.data(), dl.data(), n * sizeof(std::uint16_t));
     const bool dev_same = edgeplane_test::labels_equal(ld, lc);
     disagree += !dev_same;
 
     const double mc = median(tc), mg = median(tg), md = median(td);
-    const double kernels = median(st.pre) + median(st.edges) + median(st.seg) + median(st.cand) + median(st.val) +
-                           median(st.merge) + median(st.fin);
+    const ep::stage_times sm = st.medians();
+    const double kernels = sm.total;
     std::printf("%-28s %4dx%-4d %-11s %3zu/%-2zu %6s %8.1e %9.3f %9.3f %9.3f %8.1fx %8.3f\n", f.name.c_str(), f.w, f.h,
                 f.preset.c_str(), rg.planes.size(), rc.planes.size(),
                 same && dev_same ? "yes" : (corr.equal ? "planes" : std::to_string(corr.conflicts).c_str()), pd, mc,
                 mg, md, mc / mg, kernels);
-    const std::string g = std::to_string(f.w) + "x" + std::to_string(f.h) + " " + f.preset;
+    const std::string g = group_of(f);
     group_cuda[g].push_back(mg);
     group_dev[g].push_back(md);
     group_cpu[g].push_back(mc);
-    auto& gsm = group_stages[g];
-    gsm.pre.push_back(median(st.pre));
-    gsm.edges.push_back(median(st.edges));
-    gsm.seg.push_back(median(st.seg));
-    gsm.cand.push_back(median(st.cand));
-    gsm.val.push_back(median(st.val));
-    gsm.merge.push_back(median(st.merge));
-    gsm.fin.push_back(median(st.fin));
+    group_stages[g].add(sm);
   }
 
   std::printf("\nper group (median over its frames of each frame's median, ms)\n");
   std::printf("%-22s %3s %8s %8s %8s %8s | %7s %7s %7s %7s %7s %7s %7s\n", "group", "n", "cpu", "cuda", "dev", "cpu/cuda",
               "pre", "edges", "segs", "cands", "valid", "merge", "final");
   for (const auto& [g, v] : group_cuda) {
-    const auto& s = group_stages[g];
+    const ep::stage_times s = group_stages[g].medians();
     const double c = median(group_cpu[g]), m = median(v);
     std::printf("%-22s %3zu %8.3f %8.3f %8.3f %7.1fx | %7.3f %7.3f %7.3f %7.3f %7.3f %7.3f %7.3f\n", g.c_str(), v.size(),
-                c, m, median(group_dev[g]), c / m, median(s.pre), median(s.edges), median(s.seg), median(s.cand),
-                median(s.val), median(s.merge), median(s.fin));
+                c, m, median(group_dev[g]), c / m, s.preprocess, s.edges, s.segments, s.candidates,
+                s.validation, s.merge, s.finalize);
   }
 
   // Throughput through edgeplane::pipeline<cuda>: the frames of the largest group, cycled.
@@ -321,7 +323,15 @@ int main(int argc, char** argv) {
       if (best.empty() || v.size() > group_cuda[best].size()) best = g;
     std::vector<const frame*> set;
     for (const frame& f : frames)
-      if (std::to_string(f.w) + "x" + std::to_string(f.h) + " " + f.preset == best) set.push_back(&f);
+      if (group_of(f) == best) set.push_back(&f);
+    // the CPU's labels of the set's frames, once, for the checked warm-up of every lane count
+    std::vector<std::vector<std::uint16_t>> cpu_labels;
+    for (const frame* f : set) {
+      ep::segmenter<ep::cpu> cs(params_of(*f));
+      cpu_labels.emplace_back(f->depth.size());
+      cs.segment(ep::make_view(f->depth.data(), f->w, f->h), f->scale, f->k,
+                 ep::make_view(cpu_labels.back().data(), f->w, f->h));
+    }
     std::printf("\npipeline<cuda> throughput on group %s (%zu distinct frames, %d frames per run)\n", best.c_str(),
                 set.size(), pipeline_frames);
     std::vector<std::uint16_t> labels(set.front()->depth.size());
@@ -344,14 +354,9 @@ int main(int argc, char** argv) {
               pipe.submit(ep::make_view(f.depth.data(), f.w, f.h), f.scale, f.k);
               ++submitted;
             } else {
-              const frame& f = *set[static_cast<std::size_t>(retrieved) % set.size()];
-              pipe.retrieve(ep::make_view(labels.data(), f.w, f.h), r);
-              if (check) {
-                ep::segmenter<ep::cpu> cs(params_of(f));
-                std::vector<std::uint16_t> lc(labels.size());
-                cs.segment(ep::make_view(f.depth.data(), f.w, f.h), f.scale, f.k, ep::make_view(lc.data(), f.w, f.h));
-                bad += !edgeplane_test::labels_equal(labels, lc);
-              }
+              const std::size_t j = static_cast<std::size_t>(retrieved) % set.size();
+              pipe.retrieve(ep::make_view(labels.data(), set[j]->w, set[j]->h), r);
+              if (check) bad += !edgeplane_test::labels_equal(labels, cpu_labels[j]);
               ++retrieved;
             }
           }

@@ -177,8 +177,8 @@ struct grow_sweep_kernel {
   const float* cap;
   std::int32_t* changed;
   std::int32_t* dirty;  // rows, then columns (see above)
-  EDGEPLANE_HD bool try_take(int x, int y, std::uint16_t l) const { return take_at(x, y, depth(x, y), l); }
-  EDGEPLANE_HD EDGEPLANE_INLINE bool take_at(int x, int y, float z, std::uint16_t l) const {
+  EDGEPLANE_HD bool try_take(int x, int y, std::uint16_t l) const {
+    const float z = depth(x, y);
     if (l == 0 || !(z > 0.f)) return false;
     const point3 p = proj(x, y, z);
     const float d = plane_distance(planes, l, p);
@@ -230,7 +230,7 @@ struct grow_sweep_kernel {
   /// tolerance k sigma(z)) is computed as its chunk is loaded, and the plane and cap of the label
   /// being carried are held in registers until the label changes, so that the walk's chain from
   /// one pixel to the next is only the distance to that plane and two comparisons.  The float
-  /// operations are take_at()'s, in its order.
+  /// operations are try_take()'s, in its order.
   template <int Step>
   EDGEPLANE_HD bool device_pass(int line, int n, std::int32_t* crossing) const {
     constexpr int chunk = 8;
