@@ -29,6 +29,16 @@
 #define EDGEPLANE_UNROLL
 #endif
 
+// Keeps g++ from unrolling the short constant-count host loop that follows completely before its
+// loop vectorizer sees it: unrolled first, an 8-lane loop is left to the straight-line (SLP)
+// vectorizer, which may judge it unprofitable and leave it scalar.  Nothing elsewhere, nvcc
+// included (its front end warns about the pragma even in the host pass).
+#if defined(__GNUC__) && !defined(__clang__) && !defined(__CUDACC__)
+#define EDGEPLANE_VECTOR_LOOP _Pragma("GCC unroll 1")
+#else
+#define EDGEPLANE_VECTOR_LOOP
+#endif
+
 // Host kernels whose inner loops are SIMD over pixels (the edge pass, smoothing, the depth
 // closing, moments, growth, the failed-candidate erosion) are compiled three times on x86-64 ELF
 // systems, for x86-64-v4 (AVX-512), x86-64-v3 (AVX2) and the baseline, and the loader picks the

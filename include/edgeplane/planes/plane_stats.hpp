@@ -75,39 +75,43 @@ struct inlier_labels {
     const point3 p = proj(x, y, z);
     return plane_distance(planes, g, p) <= tol[g] ? g : 0;
   }
-  /// out[l] = (*this)(x + l, y) for l < L (host lanes of moments_kernel): where all L pixels
-  /// belong to one candidate (most runs), its plane is looked up once; elsewhere each lane looks
-  /// up its own, without branches (a lane without a candidate reads entry 0 of the tables, which
-  /// always exists, and is masked).
+  /// out[l] = (*this)(x + l, y) for l < L (host lanes of moments_kernel): where the L pixels
+  /// belong to one candidate or to none (most runs: candidates are separated by edge pixels), its
+  /// plane is looked up once and the lanes test their points in vector registers; elsewhere each
+  /// lane looks up its own, without branches (a lane without a candidate reads entry 0 of the
+  /// tables, which always exists, and is masked).
   template <int L>
   EDGEPLANE_HD EDGEPLANE_INLINE void lanes(int x, int y, std::int32_t* out) const {
     const std::int32_t* cr = &cand(x, y);
-    const std::int32_t c0 = cr[0];
+    std::int32_t c0 = cr[0];
+    for (int l = 1; l < L; ++l) c0 = cr[l] > c0 ? cr[l] : c0;
     bool one = true;
-    for (int l = 0; l < L; ++l) one &= cr[l] == c0;
-    if (one && c0 <= 0) {
+    for (int l = 0; l < L; ++l) one &= (cr[l] == c0) | (cr[l] <= 0);
+    const std::int32_t g = one && c0 > 0 ? table[c0] : 0;
+    if (one && g == 0) {  // no candidate, or one that joined no plane
       for (int l = 0; l < L; ++l) out[l] = 0;
       return;
     }
-    const std::int32_t g = one ? table[c0] : 0;
     const float* zr = &depth(x, y);
-    if (g == 0) {
+    if (!one) {
       for (int l = 0; l < L; ++l) {
         const std::int32_t c = cr[l];
         const std::int32_t gl = c > 0 ? static_cast<std::int32_t>(table[c > 0 ? c : 0]) : 0;
         const float z = zr[l];
         const float d = plane_distance(planes, gl, proj(x + l, y, z));
-        out[l] = ((gl != 0) & (z > 0.f) & (d <= tol[gl])) ? gl : 0;
+        out[l] = gl & -static_cast<std::int32_t>((gl != 0) & (z > 0.f) & (d <= tol[gl]));
       }
       return;
     }
     const float* q = planes + 4 * g;
     const float q0 = q[0], q1 = q[1], q2 = q[2], q3 = q[3], t = tol[g];
+    EDGEPLANE_VECTOR_LOOP  // (completely unrolled first, g++ 12 left this loop scalar)
     for (int l = 0; l < L; ++l) {
       const float z = zr[l];
       const point3 p = proj(x + l, y, z);
       const float d = fabsf(q0 * p.x + q1 * p.y + q2 * p.z + q3);  // plane_distance's operations
-      out[l] = ((z > 0.f) & (d <= t)) ? g : 0;
+      const bool on = (cr[l] == c0) & (z > 0.f) & (d <= t);
+      out[l] = g & -static_cast<std::int32_t>(on);  // by bits: with ?: g++ branched per lane
     }
   }
 };
