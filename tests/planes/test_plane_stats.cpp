@@ -378,6 +378,34 @@ TEST_CASE("image_labels::lanes: 8 labels at once equal the per-pixel labels, all
   CHECK(high > 0);
 }
 
+TEST_CASE("candidate_image_labels::lanes: 8 labels at once equal the per-pixel labels, for every threshold") {
+  static_assert(detail::has_label_lanes<detail::candidate_image_labels>);
+  const int w = 27, h = 4;
+  lcg_noise noise(5);
+  std::vector<std::int32_t> cand(static_cast<std::size_t>(w) * h);
+  for (auto& c : cand) c = static_cast<std::int32_t>(noise.next_u32(9)) - 1;  // ids -1..7, 0 = none
+  for (const std::int32_t above : {0, 1, 3, 6, 7}) {
+    CAPTURE(above);
+    const detail::candidate_image_labels lab{make_view<const std::int32_t>(cand.data(), w, h), above};
+    int mismatches = 0, kept = 0, at_threshold = 0;
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x + 8 <= w; ++x) {
+        std::int32_t out[8];
+        lab.lanes<8>(x, y, out);
+        for (int l = 0; l < 8; ++l) {
+          const std::int32_t c = cand[static_cast<std::size_t>(y) * w + x + l];
+          const std::int32_t want = c > above ? c : 0;  // the definition, not lab(x, y)
+          mismatches += out[l] != want;
+          kept += want != 0;
+          at_threshold += c == above;
+        }
+      }
+    CHECK(mismatches == 0);
+    CHECK(at_threshold > 0);  // ids equal to the threshold occur: they tell > from >=
+    if (above < 7) CHECK(kept > 0);
+  }
+}
+
 TEST_CASE("inlier_labels::lanes: 8 labels at once equal the per-pixel labels, and the moments those of the label image") {
   // Long runs of candidates (one plane looked up per run), candidates of no plane (table 0),
   // pixels off their plane and holes; every start column, so runs cross lane boundaries.

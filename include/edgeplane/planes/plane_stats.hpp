@@ -54,6 +54,13 @@ struct candidate_image_labels {
     const std::int32_t c = cand(x, y);
     return c > above ? c : 0;
   }
+  /// out[l] = (*this)(x + l, y) for l < L (host lanes of moments_kernel), as vector operations.
+  template <int L>
+  EDGEPLANE_HD EDGEPLANE_INLINE void lanes(int x, int y, std::int32_t* out) const {
+    const std::int32_t* cr = &cand(x, y);
+    EDGEPLANE_VECTOR_LOOP
+    for (int l = 0; l < L; ++l) out[l] = cr[l] & -static_cast<std::int32_t>(cr[l] > above);
+  }
 };
 
 /// Inliers of merged candidates: pixel i counts for plane g = table[cand(i)] only when its point
