@@ -90,10 +90,13 @@ struct inlier_labels {
   template <int L>
   EDGEPLANE_HD EDGEPLANE_INLINE void lanes(int x, int y, std::int32_t* out) const {
     const std::int32_t* cr = &cand(x, y);
-    std::int32_t c0 = cr[0];
-    for (int l = 1; l < L; ++l) c0 = cr[l] > c0 ? cr[l] : c0;
-    bool one = true;
-    for (int l = 0; l < L; ++l) one &= (cr[l] == c0) | (cr[l] <= 0);
+    std::int32_t c0 = cr[0];  // the largest id, and whether every other is 0 (or negative)
+    EDGEPLANE_VECTOR_LOOP
+    for (int l = 0; l < L; ++l) c0 = cr[l] > c0 ? cr[l] : c0;
+    unsigned others = 0;
+    EDGEPLANE_VECTOR_LOOP
+    for (int l = 0; l < L; ++l) others |= static_cast<unsigned>((cr[l] != c0) & (cr[l] > 0));
+    const bool one = others == 0;
     const std::int32_t g = one && c0 > 0 ? table[c0] : 0;
     if (one && g == 0) {  // no candidate, or one that joined no plane
       for (int l = 0; l < L; ++l) out[l] = 0;
@@ -181,7 +184,7 @@ EDGEPLANE_HD EDGEPLANE_INLINE std::uint64_t mul_fixed(std::uint64_t a, std::uint
 /// otherwise move between the cores' caches at every run.  Sums are kept as uint64 (two's
 /// complement: wrapping, so the order of additions cannot matter, and the totals fit an int64 by
 /// fixed_point_max_depth).  On the host, runs of 8 pixels whose labels are the current one or 0
-/// are summed lane by lane (vectorizable); the lanes are folded in at each hand-over.
+/// are summed lane by lane (vectorizable), a stretch of such blocks at a time (sum_stretch).
 template <class Labels>
 struct moments_kernel {
   image_view<const float> depth;
@@ -314,6 +317,75 @@ struct moments_kernel {
     flush(cur, s, x0, x1, y);
   }
 
+#if !defined(__CUDA_ARCH__)
+  // Host lanes of the row pass: the labels of pixels x .. x + lanes - 1 of row y.
+  EDGEPLANE_INLINE void load_lanes(int x, int y, std::int32_t* lab) const {
+    if constexpr (has_label_lanes<Labels>) {
+      label_of.template lanes<lanes>(x, y, lab);
+    } else {
+      for (int l = 0; l < lanes; ++l) lab[l] = label_of(x + l, y);
+    }
+  }
+  static EDGEPLANE_INLINE bool labelled(const std::int32_t* lab) {
+    unsigned any = 0;
+    for (int l = 0; l < lanes; ++l) any |= static_cast<unsigned>(lab[l] != 0);
+    return any != 0;
+  }
+  // every pixel of label cur or unlabelled
+  static EDGEPLANE_INLINE bool of_run(const std::int32_t* lab, std::int32_t cur) {
+    bool same = true;
+    for (int l = 0; l < lanes; ++l) same &= (lab[l] == cur) | (lab[l] == 0);
+    return same;
+  }
+  // From block x (labels lab, of label cur or unlabelled, one labelled at least) on, while the
+  // blocks are so: their pixels of label cur summed lane by lane (vectorizable) into lane sums
+  // local to this stretch, which the compiler keeps in registers (no call, no other path inside),
+  // then added to s (slots 0..9; slot 10 counts the labelled pixels); x1 = the last labelled
+  // pixel.  Returns the first block not taken (or the row's last whole block's end).
+  EDGEPLANE_INLINE int sum_stretch(int x, int y, std::int32_t cur, std::int32_t* lab, int& x1,
+                                   std::uint64_t* s) const {
+    const int w = depth.width;
+    std::uint64_t a[10][lanes] = {};
+    std::uint64_t count = 0;
+    for (;;) {
+      const float* zr = &depth(x, y);
+      for (int l = 0; l < lanes; ++l) {
+        const float z = zr[l];
+        const std::uint64_t on = static_cast<std::uint64_t>(lab[l] == cur);
+        const std::uint64_t m = static_cast<std::uint64_t>(0) - (on & static_cast<std::uint64_t>(z > 0.f));
+        const point3 p = proj(x + l, y, z);
+        const std::uint64_t px = static_cast<std::uint64_t>(to_fixed(p.x)) & m,
+                            py = static_cast<std::uint64_t>(to_fixed(p.y)) & m,
+                            pz = static_cast<std::uint64_t>(to_fixed(p.z)) & m;
+        count += on;
+        a[0][l] += m & 1u;
+        a[1][l] += px;
+        a[2][l] += py;
+        a[3][l] += pz;
+        a[4][l] += mul_fixed(px, px);
+        a[5][l] += mul_fixed(px, py);
+        a[6][l] += mul_fixed(px, pz);
+        a[7][l] += mul_fixed(py, py);
+        a[8][l] += mul_fixed(py, pz);
+        a[9][l] += mul_fixed(pz, pz);
+      }
+      for (int l = lanes - 1; l >= 0; --l)
+        if (lab[l] != 0) {
+          x1 = x + l;
+          break;
+        }
+      x += lanes;
+      if (x + lanes > w) break;
+      load_lanes(x, y, lab);
+      if (!labelled(lab) || !of_run(lab, cur)) break;
+    }
+    for (int k = 0; k < 10; ++k)
+      for (int l = 0; l < lanes; ++l) s[k] += a[k][l];
+    s[10] += count;
+    return x;
+  }
+#endif
+
   template <class Out>
   EDGEPLANE_HD EDGEPLANE_INLINE void row(int y, Out& flush) const {
     const int w = depth.width;
@@ -321,70 +393,20 @@ struct moments_kernel {
     std::int32_t cur = 0;
     int x0 = 0, x1 = 0, x = 0;
 #if !defined(__CUDA_ARCH__)
-    // Lane sums of the current run (slots 0..9; slot 10 counts its pixels in s directly).
-    std::uint64_t a[10][lanes] = {};
-    bool lanes_used = false;
-    auto fold = [&] {
-      if (!lanes_used) return;
-      for (int k = 0; k < 10; ++k)
-        for (int l = 0; l < lanes; ++l) {
-          s[k] += a[k][l];
-          a[k][l] = 0;
-        }
-      lanes_used = false;
-    };
-    for (; x + lanes <= w; x += lanes) {
+    for (; x + lanes <= w;) {
       std::int32_t lab[lanes];
-      if constexpr (has_label_lanes<Labels>) {
-        label_of.template lanes<lanes>(x, y, lab);
-      } else {
-        for (int l = 0; l < lanes; ++l) lab[l] = label_of(x + l, y);
-      }
-      bool same = true;  // every pixel of the current label or unlabelled
-      unsigned any = 0;
-      for (int l = 0; l < lanes; ++l) {
-        same &= (lab[l] == cur) | (lab[l] == 0);
-        any |= static_cast<unsigned>(lab[l] != 0);
-      }
-      if (same) {
-        if (!any) continue;  // (then also when cur <= 0)
-        const float* zr = &depth(x, y);
-        std::uint64_t count = 0;
-        for (int l = 0; l < lanes; ++l) {
-          const float z = zr[l];
-          const std::uint64_t on = static_cast<std::uint64_t>(lab[l] == cur);
-          const std::uint64_t m = static_cast<std::uint64_t>(0) - (on & static_cast<std::uint64_t>(z > 0.f));
-          const point3 p = proj(x + l, y, z);
-          const std::uint64_t px = static_cast<std::uint64_t>(to_fixed(p.x)) & m,
-                              py = static_cast<std::uint64_t>(to_fixed(p.y)) & m,
-                              pz = static_cast<std::uint64_t>(to_fixed(p.z)) & m;
-          count += on;
-          a[0][l] += m & 1u;
-          a[1][l] += px;
-          a[2][l] += py;
-          a[3][l] += pz;
-          a[4][l] += mul_fixed(px, px);
-          a[5][l] += mul_fixed(px, py);
-          a[6][l] += mul_fixed(px, pz);
-          a[7][l] += mul_fixed(py, py);
-          a[8][l] += mul_fixed(py, pz);
-          a[9][l] += mul_fixed(pz, pz);
-        }
-        s[10] += count;
-        for (int l = lanes - 1; l >= 0; --l)
-          if (lab[l] != 0) {
-            x1 = x + l;
-            break;
-          }
-        lanes_used = true;
+      load_lanes(x, y, lab);
+      if (!labelled(lab)) {
+        x += lanes;
         continue;
       }
-      for (int l = 0; l < lanes; ++l) {
-        if (lab[l] != 0 && lab[l] != cur) fold();
-        step(flush, s, cur, x0, x1, lab[l], x + l, y);
+      if (of_run(lab, cur)) {
+        x = sum_stretch(x, y, cur, lab, x1, s);
+        continue;
       }
+      for (int l = 0; l < lanes; ++l) step(flush, s, cur, x0, x1, lab[l], x + l, y);
+      x += lanes;
     }
-    fold();
 #endif
     for (; x < w; ++x) step(flush, s, cur, x0, x1, label_of(x, y), x, y);
     flush(cur, s, x0, x1, y);
