@@ -28,6 +28,16 @@
 namespace edgeplane {
 namespace detail {
 
+/// The index of the lowest set bit of u (u != 0), in host and device code alike (nvcc warned
+/// about __builtin_ctz, a host function, in the host/device union-find kernels).
+EDGEPLANE_HD EDGEPLANE_INLINE int lowest_bit(unsigned u) {
+#if defined(__CUDA_ARCH__)
+  return __ffs(static_cast<int>(u)) - 1;
+#else
+  return __builtin_ctz(u);
+#endif
+}
+
 EDGEPLANE_HD inline std::int32_t uf_find(std::int32_t* parent, std::int32_t x) {
   std::int32_t p = atomic_load(parent + x);
   while (p != x) {
@@ -171,7 +181,7 @@ struct uf_union_down_kernel {
         // pixels whose pair, and the pairs to their right on both rows, all join
         const unsigned square = down & adj.template right_lanes<L>(x, y) & adj.template right_lanes<L>(x, y + 1);
         for (unsigned u = down & ~((square << 1) | carry); u != 0; u &= u - 1) {
-          const std::int32_t i = static_cast<std::int32_t>(o + x + __builtin_ctz(u));
+          const std::int32_t i = static_cast<std::int32_t>(o + x + lowest_bit(u));
           uf_unite(parent, i, i + w);
         }
         carry = (square >> (L - 1)) & 1u;
