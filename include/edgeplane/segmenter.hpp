@@ -302,9 +302,14 @@ class segmenter {
   template <class Active, class Adjacency>
   std::int32_t components(std::int64_t n, Active active, std::int64_t work_items, Adjacency adj,
                           std::int32_t min_size) {
-    if constexpr (Backend::host_accessible)
-      detail::unite_components(b_, n, active, work_items, adj, parent_.data());
-    else
+    if constexpr (Backend::host_accessible) {
+      std::uint16_t* right_bits = nullptr;  // the row pass's right joins, for the vertical unions
+      if constexpr (detail::has_join_lanes<Adjacency>) {
+        right_bits_.resize(static_cast<std::size_t>(detail::join_blocks(adj.grid_width())) * adj.grid_height());
+        right_bits = right_bits_.data();
+      }
+      detail::unite_components(b_, n, active, work_items, adj, parent_.data(), right_bits);
+    } else
       connected_components(b_, n, active, work_items, adj, parent_.data());
     return flag_components(n, min_size);
   }
@@ -716,6 +721,7 @@ class segmenter {
   std::vector<int> group_, merge_parent_;
   std::vector<std::uint8_t> host_failed_;
   std::vector<std::int32_t> block_roots_;  // roots listed per block (host backends' numbering)
+  std::vector<std::uint16_t> right_bits_;  // host backends' union-find: right joins per block of 16
   std::vector<std::uint16_t> host_table_, region_origin_;
   std::vector<float> host_planes_, host_tol_;
 };

@@ -474,6 +474,24 @@ TEST_CASE_TEMPLATE("grid4_adjacency: components equal a serial union-find on ran
                              detail::grid4_adjacency<detail::covered_active>{rect, active, 0.06f, 0.f, 0.f},
                              parent_r.data());
         CHECK(parent_r.host() == want);
+        if constexpr (B::host_accessible) {
+          // The segmenter's form: the row pass keeps each block's right joins (scratch filled
+          // with garbage first) and the vertical unions read them.  The same components, and the
+          // kept joins are right_lanes'.
+          const int blocks = detail::join_blocks(w);
+          std::vector<std::uint16_t> right(static_cast<std::size_t>(blocks) * h, 0xa5a5);
+          device_array<std::int32_t, B> parent_k(b, n, -7);
+          const detail::grid4_adjacency<detail::covered_active> adj{z.cview(w, h), active, 0.06f, 0.f, 0.f};
+          detail::unite_components(b, static_cast<std::int64_t>(n), active, static_cast<std::int64_t>(n), adj,
+                                   parent_k.data(), right.data());
+          b.for_each_index(static_cast<std::int64_t>(n), detail::uf_flatten_kernel{parent_k.data()});
+          CHECK(parent_k.host() == want);
+          int wrong = 0;
+          for (int y = 0; y < h; ++y)
+            for (int k = 0; k < blocks; ++k)
+              wrong += right[static_cast<std::size_t>(y) * blocks + k] != adj.template right_lanes<16>(16 * k, y);
+          CHECK(wrong == 0);
+        }
       }
     }
   }

@@ -114,6 +114,10 @@ inline constexpr bool has_join_lanes = has_grid_joins<Adjacency> && requires(con
   a.template down_lanes<16>(0, 0);
 };
 
+/// Blocks of 16 pixels per row whose right joins the host row passes keep (uf_init_runs_kernel's
+/// right_bits): those from x = 0, 16, ... with x + 16 < w.
+EDGEPLANE_HD EDGEPLANE_INLINE int join_blocks(int w) { return w > 16 ? (w - 1) / 16 : 0; }
+
 /// Host row pass of connected_components for adjacencies with has_grid_joins (one work item per
 /// row; rows are independent): parent[i] = -1 for inactive elements, else the first element of
 /// its run of horizontally joined pixels, which is the run's smallest element and its root so far.
@@ -122,6 +126,10 @@ struct uf_init_runs_kernel {
   Active active;
   Adjacency adj;
   std::int32_t* parent;
+  /// When not null (adjacencies with has_join_lanes): row y's right joins of the 16 pixels from
+  /// x, right_lanes<16>(x, y), kept at right_bits[y * join_blocks(w) + x / 16] for every block
+  /// the lanes loop covers (x + 16 < w), for the vertical unions to read.
+  std::uint16_t* right_bits = nullptr;
   EDGEPLANE_HOST_CLONES EDGEPLANE_HD void operator()(std::int64_t row) const {
     const int y = static_cast<int>(row), w = adj.grid_width();
     const std::int64_t o = static_cast<std::int64_t>(y) * w;
@@ -134,6 +142,7 @@ struct uf_init_runs_kernel {
         unsigned act = 0;
         for (int l = 0; l < L; ++l) act |= static_cast<unsigned>(active(o + x + l)) << l;
         const unsigned right = adj.template right_lanes<L>(x, y);
+        if (right_bits) right_bits[static_cast<std::int64_t>(y) * join_blocks(w) + x / L] = static_cast<std::uint16_t>(right);
         for (int l = 0; l < L; ++l) {
           const std::int64_t i = o + x + l;
           if (!((act >> l) & 1u)) {
@@ -168,6 +177,7 @@ template <class Adjacency>
 struct uf_union_down_kernel {
   Adjacency adj;
   std::int32_t* parent;
+  const std::uint16_t* right_bits = nullptr;  // uf_init_runs_kernel's, when it kept them
   EDGEPLANE_HOST_CLONES EDGEPLANE_HD void operator()(std::int64_t row) const {
     const int y = static_cast<int>(row), w = adj.grid_width();
     const std::int64_t o = static_cast<std::int64_t>(y) * w;
@@ -179,7 +189,16 @@ struct uf_union_down_kernel {
       for (; x + L < w; x += L) {
         const unsigned down = adj.template down_lanes<L>(x, y);
         // pixels whose pair, and the pairs to their right on both rows, all join
-        const unsigned square = down & adj.template right_lanes<L>(x, y) & adj.template right_lanes<L>(x, y + 1);
+        unsigned right0, right1;
+        if (right_bits) {
+          const std::uint16_t* rb = right_bits + static_cast<std::int64_t>(y) * join_blocks(w) + x / L;
+          right0 = rb[0];
+          right1 = rb[join_blocks(w)];
+        } else {
+          right0 = adj.template right_lanes<L>(x, y);
+          right1 = adj.template right_lanes<L>(x, y + 1);
+        }
+        const unsigned square = down & right0 & right1;
         for (unsigned u = down & ~((square << 1) | carry); u != 0; u &= u - 1) {
           const std::int32_t i = static_cast<std::int32_t>(o + x + lowest_bit(u));
           uf_unite(parent, i, i + w);
@@ -449,15 +468,19 @@ namespace detail {
 /// connected_components without its last pass: `parent` ends as a forest whose roots are each
 /// component's smallest element, not yet flattened (uf_root(parent, i) is i's root).  For callers
 /// that flatten within their next pass.
+/// `right_bits` (optional, host backends): scratch of join_blocks(width) * height entries, in which
+/// the row pass keeps each block's right joins for the vertical unions (which otherwise compute
+/// them again, twice); used only by adjacencies with has_join_lanes.
 template <class Backend, class Active, class Adjacency>
 void unite_components(const Backend& b, std::int64_t n, Active active, std::int64_t work_items, Adjacency adj,
-                      std::int32_t* parent) {
+                      std::int32_t* parent, std::uint16_t* right_bits = nullptr) {
   require(n >= 0 && n < (std::int64_t(1) << 31), "union-find supports up to 2^31 - 1 elements");
   if constexpr (Backend::host_accessible && has_grid_joins<Adjacency>) {
     require(work_items == n && static_cast<std::int64_t>(adj.grid_width()) * adj.grid_height() == n,
             "connected_components: a grid adjacency needs one work item per pixel of its image");
-    b.for_each_index(adj.grid_height(), uf_init_runs_kernel<Active, Adjacency>{active, adj, parent});
-    b.for_each_index(adj.grid_height(), uf_union_down_kernel<Adjacency>{adj, parent});
+    if constexpr (!has_join_lanes<Adjacency>) right_bits = nullptr;
+    b.for_each_index(adj.grid_height(), uf_init_runs_kernel<Active, Adjacency>{active, adj, parent, right_bits});
+    b.for_each_index(adj.grid_height(), uf_union_down_kernel<Adjacency>{adj, parent, right_bits});
     return;
   }
   b.for_each_index(n, uf_init_kernel<Active>{active, parent});
