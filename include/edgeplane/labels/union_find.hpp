@@ -138,11 +138,12 @@ struct uf_init_runs_kernel {
     int x = 0;
     if constexpr (has_join_lanes<Adjacency>) {  // 16 pixels' activity and right joins as bits first
       constexpr int L = 16;
+      std::uint16_t* const kept = right_bits ? right_bits + static_cast<std::int64_t>(y) * join_blocks(w) : nullptr;
       for (; x + L < w; x += L) {
         unsigned act = 0;
         for (int l = 0; l < L; ++l) act |= static_cast<unsigned>(active(o + x + l)) << l;
         const unsigned right = adj.template right_lanes<L>(x, y);
-        if (right_bits) right_bits[static_cast<std::int64_t>(y) * join_blocks(w) + x / L] = static_cast<std::uint16_t>(right);
+        if (kept) kept[x / L] = static_cast<std::uint16_t>(right);
         for (int l = 0; l < L; ++l) {
           const std::int64_t i = o + x + l;
           if (!((act >> l) & 1u)) {
@@ -186,14 +187,15 @@ struct uf_union_down_kernel {
       constexpr int L = 16;
       if (y + 1 >= adj.grid_height()) return;  // no pixel joins down
       unsigned carry = 0;  // the previous block's last pixel is a square's left side
+      const int blocks = join_blocks(w);
+      const std::uint16_t* const kept = right_bits ? right_bits + static_cast<std::int64_t>(y) * blocks : nullptr;
       for (; x + L < w; x += L) {
         const unsigned down = adj.template down_lanes<L>(x, y);
         // pixels whose pair, and the pairs to their right on both rows, all join
         unsigned right0, right1;
-        if (right_bits) {
-          const std::uint16_t* rb = right_bits + static_cast<std::int64_t>(y) * join_blocks(w) + x / L;
-          right0 = rb[0];
-          right1 = rb[join_blocks(w)];
+        if (kept) {  // rows y and y + 1
+          right0 = kept[x / L];
+          right1 = kept[blocks + x / L];
         } else {
           right0 = adj.template right_lanes<L>(x, y);
           right1 = adj.template right_lanes<L>(x, y + 1);
