@@ -364,6 +364,32 @@ TEST_CASE_TEMPLATE("erode_failed: the separable erosion marks exactly the pixels
   }
 }
 
+namespace {
+// Runs count_roots_blocks_kernel over `parent` (a forest whose flattened form is `flat`) in
+// blocks of `block` elements and checks it against count_roots_kernel's counts of `flat` (want):
+// the counts, the flattened forest, and each block's list of its roots, in order.
+void check_count_roots_blocks(const std::vector<std::int32_t>& parent, const std::vector<std::int32_t>& flat,
+                              const std::vector<std::int32_t>& want_counts, int block, cpu::mode m) {
+  CAPTURE(block);
+  const auto n = static_cast<std::int64_t>(parent.size());
+  const std::int64_t blocks = (n + block - 1) / block;
+  std::vector<std::int32_t> counts(parent.size(), 0), roots(parent.size(), -7), nroots(static_cast<std::size_t>(blocks), -7);
+  std::vector<std::int32_t> forest = parent;
+  cpu{m}.for_each_index(blocks, detail::count_roots_blocks_kernel{forest.data(), counts.data(), n, block, roots.data(),
+                                                                  nroots.data()});
+  CHECK(counts == want_counts);
+  CHECK(forest == flat);
+  // each block lists exactly its roots, in order, from its first element on
+  for (std::int64_t k = 0; k < blocks; ++k) {
+    std::vector<std::int32_t> want;
+    for (std::int64_t i = k * block; i < std::min<std::int64_t>(n, (k + 1) * block); ++i)
+      if (flat[static_cast<std::size_t>(i)] == i) want.push_back(static_cast<std::int32_t>(i));
+    REQUIRE(nroots[static_cast<std::size_t>(k)] == static_cast<std::int32_t>(want.size()));
+    CHECK(std::equal(want.begin(), want.end(), roots.begin() + k * block));
+  }
+}
+}  // namespace
+
 // The segmenter counts each component's elements; host backends count by runs of equal roots in
 // blocks (detail::count_roots_blocks_kernel) instead of one atomic add per element.
 TEST_CASE("count_roots_blocks_kernel flattens, counts as count_roots_kernel does and lists the roots") {
@@ -388,32 +414,53 @@ TEST_CASE("count_roots_blocks_kernel flattens, counts as count_roots_kernel does
     last[static_cast<std::size_t>(r)] = static_cast<std::int32_t>(i);
   }
   REQUIRE(parent != flat);
-  std::vector<std::int32_t> a(static_cast<std::size_t>(n), 0), b(a);
-  const cpu c{};
-  c.for_each_index(n, detail::count_roots_kernel{flat.data(), a.data()});
+  std::vector<std::int32_t> a(static_cast<std::size_t>(n), 0);
+  cpu{}.for_each_index(n, detail::count_roots_kernel{flat.data(), a.data()});
   for (const int block : {1, 7, 1024})
-    for (const cpu::mode m : {cpu::mode::serial, cpu::mode::parallel}) {
-      CAPTURE(block);
-      std::fill(b.begin(), b.end(), 0);
-      const cpu cb{m};
-      const std::int64_t blocks = (n + block - 1) / block;
-      std::vector<std::int32_t> roots(static_cast<std::size_t>(n), -7), nroots(static_cast<std::size_t>(blocks), -7);
-      std::vector<std::int32_t> forest = parent;
-      cb.for_each_index(blocks, detail::count_roots_blocks_kernel{forest.data(), b.data(), n, block, roots.data(),
-                                                                  nroots.data()});
-      CHECK(a == b);
-      CHECK(forest == flat);
-      // each block lists exactly its roots, in order, from its first element on
-      for (std::int64_t k = 0; k < blocks; ++k) {
-        std::vector<std::int32_t> want;
-        for (std::int64_t i = k * block; i < std::min<std::int64_t>(n, (k + 1) * block); ++i)
-          if (flat[static_cast<std::size_t>(i)] == i) want.push_back(static_cast<std::int32_t>(i));
-        const auto first = roots.begin() + k * block;
-        REQUIRE(nroots[static_cast<std::size_t>(k)] == static_cast<std::int32_t>(want.size()));
-        CHECK(std::equal(want.begin(), want.end(), first));
-      }
-    }
+    for (const cpu::mode m : {cpu::mode::serial, cpu::mode::parallel}) check_count_roots_blocks(parent, flat, a, block, m);
   CHECK(std::count_if(a.begin(), a.end(), [](std::int32_t k) { return k > 0; }) > 50);
+}
+
+// The forests the segmenter's union-find leaves: each row run of active elements points to its
+// first element, which is a root or points to an earlier run's first element; inactive elements
+// (-1) come in runs too.  Runs of every length from 1 to 300, roots at the start of runs that
+// other runs' first elements point to, blocks that cut runs anywhere.
+TEST_CASE("count_roots_blocks_kernel on forests of runs linked to their first element") {
+  lcg_noise g(41);
+  for (const int max_run : {3, 20, 70, 300}) {
+    CAPTURE(max_run);
+    const std::int64_t n = 6007;
+    std::vector<std::int32_t> parent(static_cast<std::size_t>(n), -1);
+    std::vector<std::int32_t> heads;
+    for (std::int64_t i = 0; i < n;) {
+      const std::int64_t len = std::min<std::int64_t>(n - i, 1 + g.next_u32(static_cast<std::uint32_t>(max_run)));
+      if (g.uniform01() < 0.25) {  // an inactive run
+        i += len;
+        continue;
+      }
+      const auto head = static_cast<std::int32_t>(i);
+      const std::int32_t up = !heads.empty() && g.uniform01() < 0.7
+                                  ? heads[g.next_u32(static_cast<std::uint32_t>(heads.size()))]
+                                  : head;
+      parent[static_cast<std::size_t>(i)] = up;
+      for (std::int64_t j = i + 1; j < i + len; ++j) parent[static_cast<std::size_t>(j)] = head;
+      heads.push_back(head);
+      i += len;
+    }
+    std::vector<std::int32_t> flat(parent);
+    for (std::int64_t i = 0; i < n; ++i) {
+      std::int32_t r = parent[static_cast<std::size_t>(i)];
+      if (r < 0) continue;
+      while (parent[static_cast<std::size_t>(r)] != r) r = parent[static_cast<std::size_t>(r)];
+      flat[static_cast<std::size_t>(i)] = r;
+    }
+    REQUIRE(parent != flat);
+    std::vector<std::int32_t> a(static_cast<std::size_t>(n), 0);
+    cpu{}.for_each_index(n, detail::count_roots_kernel{flat.data(), a.data()});
+    for (const int block : {16, 33, 100, 1024})
+      for (const cpu::mode m : {cpu::mode::serial, cpu::mode::parallel}) check_count_roots_blocks(parent, flat, a, block, m);
+    CHECK(std::count_if(a.begin(), a.end(), [](std::int32_t k) { return k > 0; }) > 5);
+  }
 }
 
 TEST_CASE_TEMPLATE("grid4_adjacency: components equal a serial union-find on random images", B, EDGEPLANE_TEST_BACKENDS) {
