@@ -272,58 +272,75 @@ struct eroded_failed_active {
 };
 
 /// Separable form of eroded_failed_active (the same set, in O(1) per pixel for any r), written as
-/// bit 1 of a byte mask; bit 0 is scratch.  Rows (one work item per row): bit 0 where the
-/// horizontal window [x - r, x + r] lies inside the image and holds one candidate value.
+/// bit 1 of a byte mask; bits 0 and 2 are scratch.  Rows (one work item per row): bit 0 where the
+/// horizontal window [x - r, x + r] lies inside the image and holds one candidate value, a failed
+/// one (c > 0 and failed[c]; failed has an entry for every value, 0 included), and bit 2 where
+/// the pixel's value equals the one above it.
 struct eroded_rows_kernel {
   image_view<const std::int32_t> cand;
+  const std::uint8_t* failed;
   image_view<std::uint8_t> mask;
   int r;
   EDGEPLANE_HD void operator()(std::int64_t row) const {
-    const int y = static_cast<int>(row);
-    int run = 0;  // equal values ending at x
-    for (int x = 0; x < cand.width; ++x) {
-      run = (x > 0 && cand(x, y) == cand(x - 1, y)) ? run + 1 : 1;
-      mask(x, y) = 0;
-      if (run >= 2 * r + 1) mask(x - r, y) = 1;
+    const int y = static_cast<int>(row), w = cand.width, full = 2 * r + 1;
+    const std::int32_t* cr = &cand(0, y);
+    std::uint8_t* mr = &mask(0, y);
+    if (y > 0) {  // bit 2, in lanes
+      const std::int32_t* up = &cand(0, y - 1);
+      EDGEPLANE_VECTOR_LOOP
+      for (int x = 0; x < w; ++x) mr[x] = static_cast<std::uint8_t>((up[x] == cr[x]) << 2);
+    } else {
+      for (int x = 0; x < w; ++x) mr[x] = 0;
+    }
+    // bit 0, by runs of one value: a run [a, b) of a failed value, at least 2r + 1 long, holds
+    // the full windows' centres [a + r, b - r)
+    for (int a = 0; a < w;) {
+      const std::int32_t c = cr[a];
+      int b = a + 1;
+      while (b < w && cr[b] == c) ++b;
+      if (b - a >= full && c > 0 && failed[c])
+        for (int x = a + r; x < b - r; ++x) mr[x] = static_cast<std::uint8_t>(mr[x] | 1);
+      a = b;
     }
   }
 };
 /// Columns, one work item per block of `block` (<= MaxBlock) columns walked down together row by
-/// row: bit 1 on the pixels of failed candidates whose 2r + 1 rows of windows are all uniform with
-/// the same value, i.e. whose (2r+1)^2 window is one candidate.  Host backends take blocks of up
-/// to 64 (rows are contiguous in memory; a single column's walk touches a cache line per pixel);
-/// device backends use eroded_pixel_kernel instead.
+/// row: bit 1 on the pixels whose 2r + 1 rows of windows are all uniform with the same value, a
+/// failed one (bits 0 and 2 say so), i.e. whose (2r+1)^2 window is one failed candidate.  Host
+/// backends take blocks of up to 64 (rows are contiguous in memory; a single column's walk
+/// touches a cache line per pixel); device backends use eroded_pixel_kernel instead.  The runs
+/// are bytes, capped at 2r + 1 (all that matters is whether they reach it), so the loops are byte
+/// operations only (g++ vectorizes them; mixed with the 32-bit ids they were left scalar); r > 127
+/// counts in ints.
 template <int MaxBlock>
 struct eroded_column_blocks_kernel {
   image_view<const std::int32_t> cand;
-  const std::uint8_t* failed;
   image_view<std::uint8_t> mask;
   int r, block;
+  template <class Run>
+  EDGEPLANE_HD EDGEPLANE_INLINE void walk(int x0, int m) const {
+    const int full = 2 * r + 1;
+    const Run cap = static_cast<Run>(full);
+    Run run[MaxBlock];  // per column: uniform row windows of one value ending at row y (at most full)
+    for (int l = 0; l < m; ++l) run[l] = 0;
+    for (int y = 0; y < cand.height; ++y) {
+      const std::uint8_t* mr = &mask(x0, y);
+      // bit 2 is 0 at y = 0
+      for (int l = 0; l < m; ++l) {
+        const Run kept = (mr[l] & 4) ? run[l] : Run(0);
+        run[l] = (mr[l] & 1) ? (kept < cap ? static_cast<Run>(kept + 1) : cap) : Run(0);
+      }
+      if (y < 2 * r) continue;  // no run is full yet
+      std::uint8_t* mo = &mask(x0, y - r);  // the centre row of the windows ending at y
+      for (int l = 0; l < m; ++l) mo[l] = static_cast<std::uint8_t>(mo[l] | (run[l] == cap ? 2 : 0));
+    }
+  }
   EDGEPLANE_HOST_CLONES EDGEPLANE_HD void operator()(std::int64_t item) const {
     const int x0 = static_cast<int>(item) * block, x1 = x0 + block < cand.width ? x0 + block : cand.width;
-    int run[MaxBlock];  // per column: uniform row windows of one value ending at row y
-    for (int x = x0; x < x1; ++x) run[x - x0] = 0;
-    for (int y = 0; y < cand.height; ++y) {
-      const std::int32_t* cr = &cand(0, y);
-      const std::int32_t* cp = y > 0 ? &cand(0, y - 1) : cr;  // unused at y = 0 (run is 0 there)
-      const std::uint8_t* mr = &mask(0, y);
-      int any = 0;
-      for (int x = x0; x < x1; ++x) {
-        const int u = run[x - x0];
-        const int v = (mr[x] & 1) ? ((u > 0 && cr[x] == cp[x]) ? u + 1 : 1) : 0;
-        run[x - x0] = v;
-        any |= v >= 2 * r + 1;
-      }
-      if (!any) continue;
-      const int yy = y - r;
-      std::uint8_t* mo = &mask(0, yy);
-      const std::int32_t* co = &cand(0, yy);
-      for (int x = x0; x < x1; ++x)
-        if (run[x - x0] >= 2 * r + 1) {
-          const std::int32_t c = co[x];
-          if (c > 0 && failed[c]) mo[x] = static_cast<std::uint8_t>(mo[x] | 2);
-        }
-    }
+    if (2 * r + 1 <= 255)
+      walk<std::uint8_t>(x0, x1 - x0);
+    else
+      walk<int>(x0, x1 - x0);
   }
 };
 
@@ -450,7 +467,7 @@ void erode_failed(const Backend& b, image_view<const std::int32_t> cand, const s
                            detail::eroded_pixel_kernel{detail::eroded_failed_active{cand, failed, r}, mask});
     return;
   }
-  b.for_each_index(cand.height, detail::eroded_rows_kernel{cand, mask, r});
+  b.for_each_index(cand.height, detail::eroded_rows_kernel{cand, failed, mask, r});
   constexpr int max_block = 64;
   // host: the widest blocks (64, 32, 16 or 8 columns; 8 ids are one AVX2 vector) of which there
   // are host_parallel_items, so that a 640-wide frame's 10 blocks of 64 do not run serially;
@@ -463,7 +480,7 @@ void erode_failed(const Backend& b, image_view<const std::int32_t> cand, const s
       break;
     }
   b.for_each_index((cand.width + block - 1) / block,
-                   detail::eroded_column_blocks_kernel<max_block>{cand, failed, mask, r, block});
+                   detail::eroded_column_blocks_kernel<max_block>{cand, mask, r, block});
 }
 
 namespace detail {
