@@ -360,6 +360,7 @@ TEST_CASE_TEMPLATE("erode_failed: the separable erosion marks exactly the pixels
         CHECK(differ == 0);
         CHECK(active > 0);  // not vacuous
       }
+      CHECK_THROWS_AS(erode_failed(b, c.cview(w, h), f.data(), -1, mask.view(w, h)), edgeplane::error);
     }
   }
 }

@@ -271,11 +271,14 @@ struct eroded_failed_active {
   }
 };
 
-/// Separable form of eroded_failed_active (the same set, in O(1) per pixel for any r), written as
-/// bit 1 of a byte mask; bits 0 and 2 are scratch.  Rows (one work item per row): bit 0 where the
-/// horizontal window [x - r, x + r] lies inside the image and holds one candidate value, a failed
-/// one (c > 0 and failed[c]; failed has an entry for every value, 0 included), and bit 2 where
-/// the pixel's value equals the one above it.
+/// eroded_failed_active on host backends, one work item per row, written as bit 1 of a byte mask
+/// (bit 0 is scratch; the item writes only its own row and reads only `cand`, so rows run
+/// concurrently).  Row y's runs of one value: a run [a, b) of a failed value at least 2r + 1 long
+/// can hold full windows; over it, bit 0 marks the columns whose rows y - r .. y + r all hold the
+/// value (compared row by row in lanes, stopping once no column is left), and bit 1 the centres of
+/// 2r + 1 consecutive such columns.  Work: the row's scan, plus up to 2r compares per pixel of
+/// failed runs only (a column's walk for every pixel, as a separable form does, took a cache line
+/// per pixel or ran scalar over narrow blocks).
 struct eroded_rows_kernel {
   image_view<const std::int32_t> cand;
   const std::uint8_t* failed;
@@ -283,72 +286,58 @@ struct eroded_rows_kernel {
   int r;
   EDGEPLANE_HD void operator()(std::int64_t row) const {
     const int y = static_cast<int>(row), w = cand.width, full = 2 * r + 1;
-    const std::int32_t* cr = &cand(0, y);
     std::uint8_t* mr = &mask(0, y);
-    if (y > 0) {  // bit 2, in lanes
-      const std::int32_t* up = &cand(0, y - 1);
-      EDGEPLANE_VECTOR_LOOP
-      for (int x = 0; x < w; ++x) mr[x] = static_cast<std::uint8_t>((up[x] == cr[x]) << 2);
-    } else {
-      for (int x = 0; x < w; ++x) mr[x] = 0;
-    }
-    // bit 0, by runs of one value: a run [a, b) of a failed value, at least 2r + 1 long, holds
-    // the full windows' centres [a + r, b - r)
+    for (int x = 0; x < w; ++x) mr[x] = 0;
+    if (y < r || y + r >= cand.height) return;  // no window of this row lies inside the image
+    const std::int32_t* cr = &cand(0, y);
     for (int a = 0; a < w;) {
       const std::int32_t c = cr[a];
       int b = a + 1;
-      while (b < w && cr[b] == c) ++b;
-      if (b - a >= full && c > 0 && failed[c])
-        for (int x = a + r; x < b - r; ++x) mr[x] = static_cast<std::uint8_t>(mr[x] | 1);
+      for (;;) {  // the run's end: 16 lanes compared at a time
+        if (b + 16 > w) {
+          while (b < w && cr[b] == c) ++b;
+          break;
+        }
+        unsigned differ = 0;
+        for (int l = 0; l < 16; ++l) differ |= static_cast<unsigned>(cr[b + l] != c) << l;
+        if (differ != 0) {
+          b += lowest_bit(differ);
+          break;
+        }
+        b += 16;
+      }
+      if (b - a >= full && c > 0 && failed[c]) {
+        const int m = b - a;
+        std::uint8_t* v = mr + a;
+        for (int l = 0; l < m; ++l) v[l] = 1;
+        for (int k = 1; k <= r; ++k) {
+          const std::int32_t* up = &cand(a, y - k);
+          const std::int32_t* dn = &cand(a, y + k);
+          unsigned any = 0;
+          EDGEPLANE_VECTOR_LOOP
+          for (int l = 0; l < m; ++l) {
+            const std::uint8_t on = static_cast<std::uint8_t>(v[l] & (up[l] == c) & (dn[l] == c));
+            v[l] = on;
+            any |= on;
+          }
+          if (!any) break;
+        }
+        int run = 0;  // consecutive columns of bit 0 ending at l
+        for (int l = 0; l < m; ++l) {
+          run = (v[l] & 1) ? run + 1 : 0;
+          if (run >= full) v[l - r] = static_cast<std::uint8_t>(v[l - r] | 2);
+        }
+      }
       a = b;
     }
   }
 };
-/// Columns, one work item per block of `block` (<= MaxBlock) columns walked down together row by
-/// row: bit 1 on the pixels whose 2r + 1 rows of windows are all uniform with the same value, a
-/// failed one (bits 0 and 2 say so), i.e. whose (2r+1)^2 window is one failed candidate.  Host
-/// backends take blocks of up to 64 (rows are contiguous in memory; a single column's walk
-/// touches a cache line per pixel); device backends use eroded_pixel_kernel instead.  The runs
-/// are bytes, capped at 2r + 1 (all that matters is whether they reach it), so the loops are byte
-/// operations only (g++ vectorizes them; mixed with the 32-bit ids they were left scalar); r > 127
-/// counts in ints.
-template <int MaxBlock>
-struct eroded_column_blocks_kernel {
-  image_view<const std::int32_t> cand;
-  image_view<std::uint8_t> mask;
-  int r, block;
-  template <class Run>
-  EDGEPLANE_HD EDGEPLANE_INLINE void walk(int x0, int m) const {
-    const int full = 2 * r + 1;
-    const Run cap = static_cast<Run>(full);
-    Run run[MaxBlock];  // per column: uniform row windows of one value ending at row y (at most full)
-    for (int l = 0; l < m; ++l) run[l] = 0;
-    for (int y = 0; y < cand.height; ++y) {
-      const std::uint8_t* mr = &mask(x0, y);
-      // bit 2 is 0 at y = 0
-      for (int l = 0; l < m; ++l) {
-        const Run kept = (mr[l] & 4) ? run[l] : Run(0);
-        run[l] = (mr[l] & 1) ? (kept < cap ? static_cast<Run>(kept + 1) : cap) : Run(0);
-      }
-      if (y < 2 * r) continue;  // no run is full yet
-      std::uint8_t* mo = &mask(x0, y - r);  // the centre row of the windows ending at y
-      for (int l = 0; l < m; ++l) mo[l] = static_cast<std::uint8_t>(mo[l] | (run[l] == cap ? 2 : 0));
-    }
-  }
-  EDGEPLANE_HOST_CLONES EDGEPLANE_HD void operator()(std::int64_t item) const {
-    const int x0 = static_cast<int>(item) * block, x1 = x0 + block < cand.width ? x0 + block : cand.width;
-    if (2 * r + 1 <= 255)
-      walk<std::uint8_t>(x0, x1 - x0);
-    else
-      walk<int>(x0, x1 - x0);
-  }
-};
 
 /// erode_failed on device backends, one work item per pixel: bit 1 (value 2) where
-/// eroded_failed_active holds, else 0 (the separable passes' bit 0 is their scratch, which nothing
+/// eroded_failed_active holds, else 0 (the host's row pass uses bit 0 as scratch, which nothing
 /// reads).  The window is read only for pixels of failed candidates and stops at the first pixel
-/// that differs.  (The separable passes walk a row or a column per work item: on a GPU a few
-/// hundred threads, 0.2 ms a call at 512x424 on an H200.)
+/// that differs.  (Passes that walk a row or a column per work item keep only a few hundred GPU
+/// threads busy: the earlier separable passes took 0.2 ms a call at 512x424 on an H200.)
 struct eroded_pixel_kernel {
   eroded_failed_active eroded;
   image_view<std::uint8_t> mask;
@@ -455,32 +444,20 @@ struct pair_list_adjacency {
 
 /// Marks (bit 1 of `mask`, a byte image of cand's size in the backend's memory) the pixels that
 /// detail::eroded_failed_active(cand, failed, r) names: pixels of failed candidates whose whole
-/// (2r+1)^2 window lies in the same candidate.  Host backends: two passes, O(1) per pixel for any
-/// r; device backends: a work item per pixel (detail::eroded_pixel_kernel).  Asynchronous on
-/// device backends.
+/// (2r+1)^2 window lies in the same candidate (r >= 0, else edgeplane::error).  Host backends: a
+/// work item per row (detail::eroded_rows_kernel; other bits of `mask` are scratch); device
+/// backends: a work item per pixel (detail::eroded_pixel_kernel).  Asynchronous on device backends.
 template <class Backend>
 void erode_failed(const Backend& b, image_view<const std::int32_t> cand, const std::uint8_t* failed, int r,
                   image_view<std::uint8_t> mask) {
   detail::check_same_size(cand, mask, "candidates", "mask");
+  detail::require(r >= 0, "erode_failed: the erosion radius must be >= 0 (got " + std::to_string(r) + ")");
   if constexpr (!Backend::host_accessible) {
     detail::for_each_pixel(b, cand.width, cand.height,
                            detail::eroded_pixel_kernel{detail::eroded_failed_active{cand, failed, r}, mask});
     return;
   }
   b.for_each_index(cand.height, detail::eroded_rows_kernel{cand, failed, mask, r});
-  constexpr int max_block = 64;
-  // host: the widest blocks (64, 32, 16 or 8 columns; 8 ids are one AVX2 vector) of which there
-  // are host_parallel_items, so that a 640-wide frame's 10 blocks of 64 do not run serially;
-  // where even 8 columns give fewer, blocks of 64 (serial either way, and wide blocks cost less
-  // per row)
-  int block = max_block;
-  for (int cols = max_block; cols >= 8; cols /= 2)
-    if ((cand.width + cols - 1) / cols >= detail::host_parallel_items) {
-      block = cols;
-      break;
-    }
-  b.for_each_index((cand.width + block - 1) / block,
-                   detail::eroded_column_blocks_kernel<max_block>{cand, mask, r, block});
 }
 
 namespace detail {
