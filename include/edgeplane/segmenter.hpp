@@ -69,7 +69,9 @@ struct count_roots_kernel {
 /// nroots[item].  The union-find need not be flattened: the kernel flattens its block (parent[i]
 /// = i's root), as uf_flatten_kernel does; an element whose parent is the one the previous walk
 /// started from takes that walk's root (the roots are final: no union runs any more), so a
-/// horizontal run linked to its first pixel is walked once, not once per pixel.
+/// horizontal run linked to its first pixel is walked once, not once per pixel.  Inactive elements
+/// (-1) do not end a root's run (a row's pixels of one component between inactive ones add once),
+/// and 16 inactive ones are passed over at once.
 struct count_roots_blocks_kernel {
   std::int32_t* parent;
   std::int32_t* count;
@@ -77,27 +79,41 @@ struct count_roots_blocks_kernel {
   int block;
   std::int32_t* roots;
   std::int32_t* nroots;
+  static constexpr int lanes = 16;
+  // every element of i .. i + lanes - 1 inactive (parent -1).  Plain reads: only this work item
+  // writes its block's entries (other items' walks only read them).
+  EDGEPLANE_HD EDGEPLANE_INLINE bool inactive_lanes(std::int64_t i) const {
+    const std::int32_t* p = parent + i;
+    std::int32_t all = -1;
+    for (int l = 0; l < lanes; ++l) all &= p[l];
+    return all < 0;  // (the sign bit stays set only if every entry is negative)
+  }
   EDGEPLANE_HD void operator()(std::int64_t item) const {
     const std::int64_t i0 = item * block, i1 = i0 + block < n ? i0 + block : n;
     std::int32_t cur = -1, run = 0, listed = 0;
     std::int32_t walked = -1, walked_root = -1;  // the parent the last walk started from, its root
-    for (std::int64_t i = i0; i < i1; ++i) {
-      std::int32_t r = atomic_load(parent + i);
-      if (r >= 0 && r != cur) {  // (an element of the current root's run is flat already)
-        if (r != walked) {
-          walked = r;
-          walked_root = uf_root(parent, static_cast<std::int32_t>(i));
+    for (std::int64_t c0 = i0; c0 < i1; c0 += lanes) {
+      const std::int64_t c1 = c0 + lanes < i1 ? c0 + lanes : i1;
+      if (c1 - c0 == lanes && inactive_lanes(c0)) continue;  // (split rounds: most of their rectangle)
+      for (std::int64_t i = c0; i < c1; ++i) {
+        std::int32_t r = atomic_load(parent + i);
+        if (r < 0) continue;  // inactive: does not end the current root's run
+        if (r != cur) {       // (an element of the current root's run is flat already)
+          if (r != walked) {
+            walked = r;
+            walked_root = uf_root(parent, static_cast<std::int32_t>(i));
+          }
+          r = walked_root;
+          atomic_store(parent + i, r);
         }
-        r = walked_root;
-        atomic_store(parent + i, r);
+        if (r != cur) {
+          if (cur >= 0) atomic_add(count + cur, run);
+          cur = r;
+          run = 0;
+        }
+        ++run;
+        if (r == static_cast<std::int32_t>(i)) roots[i0 + listed++] = r;
       }
-      if (r != cur) {
-        if (cur >= 0) atomic_add(count + cur, run);
-        cur = r;
-        run = 0;
-      }
-      ++run;
-      if (r == static_cast<std::int32_t>(i)) roots[i0 + listed++] = r;
     }
     if (cur >= 0) atomic_add(count + cur, run);
     nroots[item] = listed;
