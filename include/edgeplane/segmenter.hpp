@@ -247,7 +247,7 @@ class segmenter {
            z_proc_.capacity_bytes() + z_smooth_.capacity_bytes() + edges_.capacity_bytes() + mask_.capacity_bytes() + runs_.capacity_bytes() + cov_l_.capacity_bytes() +
            cov_r_.capacity_bytes() + parent_.capacity_bytes() + count_.capacity_bytes() + flags_.capacity_bytes() +
            scan_.capacity_bytes() + cand_.capacity_bytes() + failed_.capacity_bytes() + moments_.capacity_bytes() + bbox_.capacity_bytes() + table_.capacity_bytes() +
-           planes_.capacity_bytes() + tol_.capacity_bytes() + flag_.capacity_bytes() + grow_counts_.capacity_bytes() + sweep_dirty_.capacity_bytes() + lab_a_.capacity_bytes() + lab_b_.capacity_bytes() + lab_c_.capacity_bytes() +
+           planes_.capacity_bytes() + tol_.capacity_bytes() + refit_planes_.capacity_bytes() + refit_tol_.capacity_bytes() + flag_.capacity_bytes() + grow_counts_.capacity_bytes() + sweep_dirty_.capacity_bytes() + lab_a_.capacity_bytes() + lab_b_.capacity_bytes() + lab_c_.capacity_bytes() +
            lab_full_.capacity_bytes() + origin_.capacity_bytes();
   }
 
@@ -279,6 +279,8 @@ class segmenter {
     table_.set_backend(b_);
     planes_.set_backend(b_);
     tol_.set_backend(b_);
+    refit_planes_.set_backend(b_);
+    refit_tol_.set_backend(b_);
     flag_.set_backend(b_);
     grow_counts_.set_backend(b_);
     sweep_dirty_.set_backend(b_);
@@ -568,18 +570,50 @@ class segmenter {
     tol_.resize(host_tol_.size());
     b_.copy_from_host(table_.data(), host_table_.data(), host_table_.size() * sizeof(std::uint16_t));
     // Robust refit: twice, keep only the candidate pixels within 2.5 RMS residuals of their plane
-    // (the rim of a neighbouring face that a candidate picks up at a crease biases the fit).
-    for (int pass = 0; pass < 2 && num_planes > 0; ++pass) {
-      b_.copy_from_host(planes_.data(), host_planes_.data(), host_planes_.size() * sizeof(float));
-      b_.copy_from_host(tol_.data(), host_tol_.data(), host_tol_.size() * sizeof(float));
-      moments_.resize(static_cast<std::size_t>(num_planes + 1) * moment_slots);
-      bbox_.resize(static_cast<std::size_t>(num_planes + 1) * 4);
+    // (the rim of a neighbouring face that a candidate picks up at a crease biases the fit).  Each
+    // pass sums only the pixels whose membership changed (detail::inlier_change_labels: label g
+    // for those that joined plane g, g + num_planes for those that left it) and corrects the
+    // previous sums, integers, so the result is exactly the sums of the pass's inliers.  The first
+    // pass starts from the sums of the plane's candidates (every pixel of theirs counted in).
+    // Those sums are the candidates' pixels in `cand` (a split round writes only over pixels of
+    // retired candidates); should slot 10 (pixels) disagree with slot 0 (points) afterwards, as it
+    // must not, the first pass's inliers are summed directly instead.
+    constexpr int refit_passes = 2;
+    const std::size_t slots = static_cast<std::size_t>(num_planes + 1) * moment_slots;
+    host_moments_.assign(group_moments_.begin(), group_moments_.end());
+    for (int pass = 0; pass < refit_passes && num_planes > 0; ++pass) {
+      // planes_ and tol_ hold the previous pass's planes; this pass's go to refit_planes_, refit_tol_
+      refit_planes_.resize(host_planes_.size());
+      refit_tol_.resize(host_tol_.size());
+      b_.copy_from_host(refit_planes_.data(), host_planes_.data(), host_planes_.size() * sizeof(float));
+      b_.copy_from_host(refit_tol_.data(), host_tol_.data(), host_tol_.size() * sizeof(float));
+      const std::int32_t changes = 2 * num_planes;
+      moments_.resize(static_cast<std::size_t>(changes + 1) * moment_slots);
+      bbox_.resize(static_cast<std::size_t>(changes + 1) * 4);
+      const float* before_planes = pass == 0 ? refit_planes_.data() : planes_.data();
+      const float* before_tol = pass == 0 ? refit_tol_.data() : tol_.data();
       accumulate_moments(b_, z, kp,
-                         detail::inlier_labels{cand, table_.data(), planes_.data(), tol_.data(), z,
-                                               detail::make_projector(kp)},
-                         num_planes, moments_.data(), bbox_.data());
-      host_moments_.resize(static_cast<std::size_t>(num_planes + 1) * moment_slots);
-      b_.copy_to_host(host_moments_.data(), moments_.data(), host_moments_.size() * sizeof(std::uint64_t));
+                         detail::inlier_change_labels{cand, table_.data(), before_planes, before_tol,
+                                                      refit_planes_.data(), refit_tol_.data(), num_planes, z,
+                                                      detail::make_projector(kp), pass == 0},
+                         changes, moments_.data(), bbox_.data());
+      change_moments_.resize(static_cast<std::size_t>(changes + 1) * moment_slots);
+      b_.copy_to_host(change_moments_.data(), moments_.data(), change_moments_.size() * sizeof(std::uint64_t));
+      bool consistent = true;
+      for (std::size_t i = moment_slots; i < slots; ++i)
+        host_moments_[i] += change_moments_[i] - change_moments_[i + slots - moment_slots];
+      for (std::size_t i = moment_slots; i < slots && pass == 0; i += moment_slots)
+        consistent = consistent && host_moments_[i + 10] == host_moments_[i];
+      if (!consistent) {
+        moments_.resize(slots);
+        accumulate_moments(b_, z, kp,
+                           detail::inlier_labels{cand, table_.data(), refit_planes_.data(), refit_tol_.data(), z,
+                                                 detail::make_projector(kp)},
+                           num_planes, moments_.data(), bbox_.data());
+        b_.copy_to_host(host_moments_.data(), moments_.data(), slots * sizeof(std::uint64_t));
+      }
+      std::swap(planes_, refit_planes_);  // the next pass compares with this one's planes
+      std::swap(tol_, refit_tol_);
       set_planes(host_moments_.data());
     }
     b_.copy_from_host(planes_.data(), host_planes_.data(), host_planes_.size() * sizeof(float));
@@ -726,11 +760,11 @@ class segmenter {
   buffer<std::uint64_t, Backend> moments_;
   buffer<std::int32_t, Backend> bbox_;
   buffer<std::uint16_t, Backend> table_;
-  buffer<float, Backend> planes_, tol_;
+  buffer<float, Backend> planes_, tol_, refit_planes_, refit_tol_;
   buffer<std::int32_t, Backend> flag_, grow_counts_, sweep_dirty_;
   buffer<std::uint16_t, Backend> lab_a_, lab_b_, lab_c_, lab_full_, origin_;
   // host scratch, reused across frames
-  std::vector<std::uint64_t> host_moments_, group_moments_;
+  std::vector<std::uint64_t> host_moments_, group_moments_, change_moments_;
   std::vector<std::int32_t> host_bbox_;
   std::vector<plane_fit> fits_, group_fits_;
   std::vector<char> keep_, status_;

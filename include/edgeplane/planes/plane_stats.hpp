@@ -63,6 +63,62 @@ struct candidate_image_labels {
   }
 };
 
+/// A plane's equation and inlier tolerance (planes: nx, ny, nz, d per plane), held in registers.
+struct plane_tolerance {
+  float n0, n1, n2, d, tol;
+  EDGEPLANE_HD EDGEPLANE_INLINE static plane_tolerance of(const float* planes, const float* tol, std::int32_t g) {
+    const float* q = planes + 4 * g;
+    return {q[0], q[1], q[2], q[3], tol[g]};
+  }
+  /// plane_distance(planes, g, p) <= tol[g], with plane_distance's operations
+  EDGEPLANE_HD EDGEPLANE_INLINE bool holds(point3 p) const { return fabsf(n0 * p.x + n1 * p.y + n2 * p.z + d) <= tol; }
+};
+
+/// The host lanes of the inlier label sources: out[l] = decide(g, p, on, valid) for pixels x + l
+/// (l < L) of row y, where g is the plane of the pixel's candidate (table[cand]), p its point, on
+/// whether it has a plane and valid whether its depth is.  Where the L pixels belong to one
+/// candidate or to none (most runs: candidates are separated by edge pixels), its plane is looked
+/// up once and the lanes decide in vector registers (decide's plane coefficients are then loop
+/// invariants); where none has a plane, out is 0 without a decision; elsewhere each lane looks up
+/// its own, without branches (a lane without a candidate reads entry 0 of the tables, which
+/// always exists, and is off).  decide must give 0 for lanes that are off.  It takes the plane's
+/// coefficients as load(g) returns them, loaded once per run in the one-candidate case (g++ kept
+/// their loads inside the vector loop otherwise).
+template <int L, class Load, class Decide>
+EDGEPLANE_HD EDGEPLANE_INLINE void inlier_lanes(image_view<const std::int32_t> cand, const std::uint16_t* table,
+                                                image_view<const float> depth, projector proj, int x, int y,
+                                                std::int32_t* out, Load load, Decide decide) {
+  const std::int32_t* cr = &cand(x, y);
+  std::int32_t c0 = cr[0];  // the largest id, and whether every other is 0 (or negative)
+  EDGEPLANE_VECTOR_LOOP
+  for (int l = 0; l < L; ++l) c0 = cr[l] > c0 ? cr[l] : c0;
+  unsigned others = 0;
+  EDGEPLANE_VECTOR_LOOP
+  for (int l = 0; l < L; ++l) others |= static_cast<unsigned>((cr[l] != c0) & (cr[l] > 0));
+  const bool one = others == 0;
+  const std::int32_t g = one && c0 > 0 ? table[c0] : 0;
+  if (one && g == 0) {  // no candidate, or one that joined no plane
+    for (int l = 0; l < L; ++l) out[l] = 0;
+    return;
+  }
+  const float* zr = &depth(x, y);
+  if (!one) {
+    for (int l = 0; l < L; ++l) {
+      const std::int32_t c = cr[l];
+      const std::int32_t gl = c > 0 ? static_cast<std::int32_t>(table[c > 0 ? c : 0]) : 0;
+      const float z = zr[l];
+      out[l] = decide(gl, load(gl), proj(x + l, y, z), gl != 0, z > 0.f);
+    }
+    return;
+  }
+  const auto coefficients = load(g);
+  EDGEPLANE_VECTOR_LOOP  // (completely unrolled first, g++ 12 left this loop scalar)
+  for (int l = 0; l < L; ++l) {
+    const float z = zr[l];
+    out[l] = decide(g, coefficients, proj(x + l, y, z), cr[l] == c0, z > 0.f);
+  }
+}
+
 /// Inliers of merged candidates: pixel i counts for plane g = table[cand(i)] only when its point
 /// lies within tol[g] metres of that plane (planes: nx, ny, nz, d per plane, index 0 unused).
 /// Used to refit planes without the rim pixels a candidate picks up at creases.
@@ -82,47 +138,67 @@ struct inlier_labels {
     const point3 p = proj(x, y, z);
     return plane_distance(planes, g, p) <= tol[g] ? g : 0;
   }
-  /// out[l] = (*this)(x + l, y) for l < L (host lanes of moments_kernel): where the L pixels
-  /// belong to one candidate or to none (most runs: candidates are separated by edge pixels), its
-  /// plane is looked up once and the lanes test their points in vector registers; elsewhere each
-  /// lane looks up its own, without branches (a lane without a candidate reads entry 0 of the
-  /// tables, which always exists, and is masked).
+  /// out[l] = (*this)(x + l, y) for l < L (host lanes of moments_kernel; inlier_lanes).
   template <int L>
   EDGEPLANE_HD EDGEPLANE_INLINE void lanes(int x, int y, std::int32_t* out) const {
-    const std::int32_t* cr = &cand(x, y);
-    std::int32_t c0 = cr[0];  // the largest id, and whether every other is 0 (or negative)
-    EDGEPLANE_VECTOR_LOOP
-    for (int l = 0; l < L; ++l) c0 = cr[l] > c0 ? cr[l] : c0;
-    unsigned others = 0;
-    EDGEPLANE_VECTOR_LOOP
-    for (int l = 0; l < L; ++l) others |= static_cast<unsigned>((cr[l] != c0) & (cr[l] > 0));
-    const bool one = others == 0;
-    const std::int32_t g = one && c0 > 0 ? table[c0] : 0;
-    if (one && g == 0) {  // no candidate, or one that joined no plane
-      for (int l = 0; l < L; ++l) out[l] = 0;
-      return;
-    }
-    const float* zr = &depth(x, y);
-    if (!one) {
-      for (int l = 0; l < L; ++l) {
-        const std::int32_t c = cr[l];
-        const std::int32_t gl = c > 0 ? static_cast<std::int32_t>(table[c > 0 ? c : 0]) : 0;
-        const float z = zr[l];
-        const float d = plane_distance(planes, gl, proj(x + l, y, z));
-        out[l] = gl & -static_cast<std::int32_t>((gl != 0) & (z > 0.f) & (d <= tol[gl]));
-      }
-      return;
-    }
-    const float* q = planes + 4 * g;
-    const float q0 = q[0], q1 = q[1], q2 = q[2], q3 = q[3], t = tol[g];
-    EDGEPLANE_VECTOR_LOOP  // (completely unrolled first, g++ 12 left this loop scalar)
-    for (int l = 0; l < L; ++l) {
-      const float z = zr[l];
-      const point3 p = proj(x + l, y, z);
-      const float d = fabsf(q0 * p.x + q1 * p.y + q2 * p.z + q3);  // plane_distance's operations
-      const bool on = (cr[l] == c0) & (z > 0.f) & (d <= t);
-      out[l] = g & -static_cast<std::int32_t>(on);  // by bits: with ?: g++ branched per lane
-    }
+    inlier_lanes<L>(
+        cand, table, depth, proj, x, y, out, [&](std::int32_t g) { return plane_tolerance::of(planes, tol, g); },
+        [](std::int32_t g, const plane_tolerance& q, point3 p, bool on, bool valid) {
+          return g & -static_cast<std::int32_t>(on & valid & q.holds(p));  // by bits: with ?: g++ branched per lane
+        });
+  }
+};
+
+/// The pixels whose inlier_labels membership differs between two plane sets (the robust refit's
+/// passes: `before_*` the previous pass's planes and tolerances, `planes` and `tol` this pass's):
+/// g where the pixel is an inlier of plane g = table[cand(i)] now and was not, g + num_planes
+/// where it was and is no longer, 0 elsewhere.  The moments of these labels turn the previous
+/// pass's sums into this pass's exactly (integer sums; wrapping): new[g] = old[g] + m[g] -
+/// m[g + num_planes], so a pass reads every pixel but sums only the few that changed.  Each
+/// membership is decided with inlier_labels' operations, so it is the one that pass computed.
+/// With before_all, every pixel of a candidate of plane g counts as having been in (the sums of
+/// the plane's candidates, which also count the pixels without valid depth, in slot 10 only):
+/// the labels are then g + num_planes for the pixels that are not inliers now, 0 elsewhere.
+struct inlier_change_labels {
+  image_view<const std::int32_t> cand;
+  const std::uint16_t* table;
+  const float* before_planes;
+  const float* before_tol;
+  const float* planes;
+  const float* tol;
+  std::int32_t num_planes;
+  image_view<const float> depth;
+  projector proj;
+  bool before_all = false;
+  EDGEPLANE_HD std::int32_t operator()(int x, int y) const {
+    const std::int32_t c = cand(x, y);
+    if (c <= 0) return 0;
+    const std::int32_t g = table[c];
+    const float z = depth(x, y);
+    if (g == 0) return 0;
+    if (!(z > 0.f)) return before_all ? g + num_planes : 0;
+    const point3 p = proj(x, y, z);
+    const bool was = before_all || plane_distance(before_planes, g, p) <= before_tol[g];
+    const bool is = plane_distance(planes, g, p) <= tol[g];
+    return was == is ? 0 : is ? g : g + num_planes;
+  }
+  /// out[l] = (*this)(x + l, y) for l < L (host lanes of moments_kernel; inlier_lanes).
+  template <int L>
+  EDGEPLANE_HD EDGEPLANE_INLINE void lanes(int x, int y, std::int32_t* out) const {
+    struct now_and_before {
+      plane_tolerance now, before;
+    };
+    const std::int32_t gone = num_planes;
+    const bool all = before_all;
+    inlier_lanes<L>(
+        cand, table, depth, proj, x, y, out,
+        [&](std::int32_t g) {
+          return now_and_before{plane_tolerance::of(planes, tol, g), plane_tolerance::of(before_planes, before_tol, g)};
+        },
+        [gone, all](std::int32_t g, const now_and_before& q, point3 p, bool on, bool valid) {
+          const bool is = on & valid & q.now.holds(p), was = on & (all | (valid & q.before.holds(p)));
+          return (g & -static_cast<std::int32_t>(is & !was)) | ((g + gone) & -static_cast<std::int32_t>(was & !is));
+        });
   }
 };
 
