@@ -152,7 +152,11 @@ struct diagonal_runs_kernel {
   line_test test;
 
   EDGEPLANE_HD void keep(int x0, int y0, int len) const {
-    for (int k = 0; k < len; ++k) covered(x0 + k * Direction::dx, y0 + k * Direction::dy) = 1;
+    // through a local pointer and step: a byte store may alias anything, so with covered(x, y)
+    // the compiler reloaded the view's pointer and pitch for every pixel
+    std::uint8_t* const p = &covered(x0, y0);
+    const std::ptrdiff_t step = covered.pitch * std::ptrdiff_t(Direction::dy) + Direction::dx;
+    for (int k = 0; k < len; ++k) p[k * step] = 1;
   }
 
   /// Tests run (x0, y0, len) and its split parts.
