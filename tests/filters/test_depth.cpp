@@ -288,3 +288,49 @@ TEST_CASE("smooth_depth: the 16-pixel row kernel equals the per-pixel kernel bit
         CHECK(differ == 0);
       }
 }
+
+TEST_CASE("close_depth: the host row kernels give the per-pixel kernels' depths, bit for bit, in place too") {
+  // Random holes (single pixels, short runs, blocks, whole 32-pixel blocks and stretches longer
+  // than a 256-pixel chunk, each row edge) over a noisy plane; widths around the 32-pixel block
+  // and the chunk; radii 1 to 3; a separate output and in place.
+  lcg_noise noise(21);
+  int filled = 0, holes_left = 0;
+  for (const int w : {5, 31, 33, 64, 257, 300, 611})
+    for (const int r : {1, 2, 3}) {
+      const int h = 23;
+      CAPTURE(w);
+      CAPTURE(r);
+      std::vector<float> z(static_cast<std::size_t>(w) * h);
+      for (std::size_t i = 0; i < z.size(); ++i) z[i] = 1.5f + 0.001f * static_cast<float>(i % 97) + noise(0.01f);
+      for (int k = 0; k < w * h / 20; ++k) {  // holes of 1 to 40 pixels along a row, some two rows high
+        const std::uint32_t at = noise.next_u32(static_cast<std::uint32_t>(z.size()));
+        const int len = 1 + static_cast<int>(noise.next_u32(k % 5 == 0 ? 40u : 3u));
+        for (int j = 0; j < len && at + j < z.size(); ++j) {
+          z[at + j] = 0.f;
+          if (k % 7 == 0 && at + j + w < z.size()) z[at + j + w] = 0.f;
+        }
+      }
+      for (int x = 0; x < w && 7 * w < static_cast<int>(z.size()); ++x) z[static_cast<std::size_t>(6 * w + x)] = 0.f;  // a whole row
+      const image_view<const float> in{z.data(), w, h, w};
+      std::vector<float> dil(z.size(), -5.f), want(z.size(), -7.f);
+      const cpu serial{cpu::mode::serial};
+      detail::for_each_pixel(serial, w, h, detail::depth_dilate_kernel{in, make_view(dil.data(), w, h), r});
+      detail::for_each_pixel(serial, w, h,
+                             detail::depth_erode_kernel{in, make_view<const float>(dil.data(), w, h),
+                                                        make_view(want.data(), w, h), r});
+      std::vector<float> z1(z), scratch(z.size(), -3.f), out(z.size(), -9.f);
+      close_depth(cpu{}, make_view(z1.data(), w, h), make_view(scratch.data(), w, h), make_view(out.data(), w, h), r);
+      CHECK(scratch == dil);
+      CHECK(out == want);
+      CHECK(z1 == z);  // the input is left alone
+      std::vector<float> z2(z);
+      close_depth(cpu{}, make_view(z2.data(), w, h), make_view(scratch.data(), w, h), make_view(z2.data(), w, h), r);
+      CHECK(z2 == want);
+      for (std::size_t i = 0; i < z.size(); ++i) {
+        filled += z[i] == 0.f && want[i] > 0.f;
+        holes_left += z[i] == 0.f && want[i] == 0.f;
+      }
+    }
+  CHECK(filled > 1000);     // holes the closing fills...
+  CHECK(holes_left > 1000);  // ...and ones it leaves
+}

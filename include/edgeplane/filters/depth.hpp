@@ -93,10 +93,27 @@ struct depth_rows_kernel {
     const image_view<const float> taps = Dilate ? in : dilated;
     const float* c = &in(0, y);
     float* o = &out(0, y);
-    constexpr int chunk = 256;
+    constexpr int chunk = 256, block = 32;
     float m[chunk];
-    for (int xa = 0; xa < w; xa += chunk) {
-      const int xb = xa + chunk < w ? xa + chunk : w;
+    // Only pixels without valid depth change (either half gives a valid pixel its own depth), so
+    // the window is accumulated only over stretches of 32-pixel blocks that hold one (at most a
+    // chunk long); the other blocks are copied, or left alone in place.
+    for (int xa = 0; xa < w;) {
+      const auto clean = [&](int x0) {  // block x0 .. x0 + block - 1 (within the row) all valid
+        const int x1 = x0 + block < w ? x0 + block : w;
+        unsigned holes = 0;
+        for (int x = x0; x < x1; ++x) holes |= static_cast<unsigned>(!(c[x] > 0.f));
+        return holes == 0;
+      };
+      if (clean(xa)) {
+        const int xb = xa + block < w ? xa + block : w;
+        if (Dilate || o != c)
+          for (int x = xa; x < xb; ++x) o[x] = c[x];
+        xa = xb;
+        continue;
+      }
+      int xb = xa + block < w ? xa + block : w;
+      while (xb < w && xb - xa + block <= chunk && !clean(xb)) xb = xb + block < w ? xb + block : w;
       for (int x = xa; x < xb; ++x) m[x - xa] = Dilate ? c[x] : 3.4e38f;
       for_each_window_shift(taps, y, r, [&](const float* t, int dx, int x0, int x1) {
         const int lo = x0 > xa ? x0 : xa, hi = x1 < xb ? x1 : xb;
@@ -108,15 +125,11 @@ struct depth_rows_kernel {
             m[x - xa] = v < m[x - xa] ? v : m[x - xa];
         }
       });
-      if (Dilate || o != c) {
-        for (int x = xa; x < xb; ++x) {
-          const float z = c[x], v = m[x - xa];
-          o[x] = z > 0.f ? z : (Dilate ? v : (v > 0.f ? v : 0.f));
-        }
-      } else {  // in place: only the holes are written (a valid pixel's line stays clean)
-        for (int x = xa; x < xb; ++x)
-          if (!(c[x] > 0.f)) o[x] = m[x - xa] > 0.f ? m[x - xa] : 0.f;
+      for (int x = xa; x < xb; ++x) {  // (in place too: a valid pixel is rewritten with its own depth)
+        const float z = c[x], v = m[x - xa];
+        o[x] = z > 0.f ? z : (Dilate ? v : (v > 0.f ? v : 0.f));
       }
+      xa = xb;
     }
   }
 };
