@@ -301,7 +301,8 @@ class segmenter {
 
   // Downloads the moment blocks of labels first+1..n and fits each (host); the blocks and fits of
   // labels 1..first stay as they are.
-  void download_fits(std::int32_t n, std::vector<plane_fit>& fits, std::int32_t first = 0) {
+  // (planes = false: the moments are first-order only, and only counts, boxes and centroids are set)
+  void download_fits(std::int32_t n, std::vector<plane_fit>& fits, std::int32_t first = 0, bool planes = true) {
     host_moments_.resize(static_cast<std::size_t>(n + 1) * moment_slots);
     host_bbox_.resize(static_cast<std::size_t>(n + 1) * 4);
     const std::size_t m0 = static_cast<std::size_t>(first + 1) * moment_slots, b0 = static_cast<std::size_t>(first + 1) * 4;
@@ -309,8 +310,8 @@ class segmenter {
     b_.copy_to_host(host_bbox_.data() + b0, bbox_.data() + b0, (host_bbox_.size() - b0) * sizeof(std::int32_t));
     fits.resize(static_cast<std::size_t>(n));
     for (std::int32_t c = first + 1; c <= n; ++c)
-      fits[c - 1] = fit_plane(host_moments_.data() + static_cast<std::size_t>(c) * moment_slots,
-                              host_bbox_.data() + static_cast<std::size_t>(c) * 4);
+      fits[c - 1] = (planes ? fit_plane : centroid_fit)(host_moments_.data() + static_cast<std::size_t>(c) * moment_slots,
+                                                        host_bbox_.data() + static_cast<std::size_t>(c) * 4);
   }
 
   // The connected components (into parent_) of the n elements, their roots flagged (flags_) where
@@ -709,12 +710,13 @@ class segmenter {
       final_labels = view(lab_full_.data(), w, h);
       upsample_labels(b_, image_view<const std::uint16_t>(la), final_labels);
     }
-    // final statistics at output resolution
+    // final statistics at output resolution: counts, centroids and boxes, which need only the
+    // first-order sums (the planes' equations and eigenvalues are the validated candidates')
     moments_.resize(static_cast<std::size_t>(num_planes + 1) * moment_slots);
     bbox_.resize(static_cast<std::size_t>(num_planes + 1) * 4);
-    accumulate_moments(b_, image_view<const float>(z_full), k, detail::image_labels{final_labels}, num_planes,
-                       moments_.data(), bbox_.data());
-    download_fits(num_planes, fits_);
+    accumulate_first_moments(b_, image_view<const float>(z_full), k, detail::image_labels{final_labels}, num_planes,
+                             moments_.data(), bbox_.data());
+    download_fits(num_planes, fits_, 0, false);
     for (int g = 1; g <= num_planes; ++g) {
       // The plane equation and eigenvalues come from the validated candidates (before growth and
       // closing, whose rim pixels would bias the fit); extent, centroid and counts from the labels.

@@ -352,6 +352,36 @@ TEST_CASE_TEMPLATE("accumulate_moments: long runs (the host's 8-pixel lanes) giv
         }
         for (int j = 0; j < 4; ++j) CHECK(got_bb[4 * l + j] == ref_bb[4 * l + j]);
       }
+      // first-order only: the same counts, sums of coordinates and boxes, no products (0); a
+      // centroid_fit of them is fit_plane's of the full sums, bit for bit, in every field it sets
+      device_array<std::uint64_t, B> m1(b, static_cast<std::size_t>(num + 1) * moment_slots, 777);
+      device_array<std::int32_t, B> bb1(b, static_cast<std::size_t>(num + 1) * 4, 777);
+      accumulate_first_moments(b, z.cview(w, h), k, detail::candidate_image_labels{c.cview(w, h), above}, num,
+                               m1.data(), bb1.data());
+      const auto got1 = m1.host();
+      const auto got1_bb = bb1.host();
+      int fitted = 0;
+      for (int l = 1; l <= num; ++l) {
+        CAPTURE(l);
+        for (int j = 0; j < moment_slots; ++j) {
+          CAPTURE(j);
+          const std::int64_t want = j >= 4 && j <= 9 ? 0 : ref[static_cast<std::size_t>(l) * moment_slots + j];
+          CHECK(static_cast<std::int64_t>(got1[static_cast<std::size_t>(l) * moment_slots + j]) == want);
+        }
+        for (int j = 0; j < 4; ++j) CHECK(got1_bb[4 * l + j] == ref_bb[4 * l + j]);
+        const plane_fit full = fit_plane(got.data() + static_cast<std::size_t>(l) * moment_slots, got_bb.data() + 4 * l);
+        const plane_fit first = centroid_fit(got1.data() + static_cast<std::size_t>(l) * moment_slots,
+                                             got1_bb.data() + 4 * l);
+        CHECK(first.points == full.points);
+        CHECK(first.pixels == full.pixels);
+        CHECK(first.bbox == full.bbox);
+        for (int j = 0; j < 3; ++j) CHECK(first.centroid(j) == full.centroid(j));
+        if (full.points >= 3) {
+          CHECK(first.centroid.norm() > 0.5);  // (a plane 2.6 m away)
+          ++fitted;
+        }
+      }
+      CHECK(fitted >= num - 2);
     }
   }
 }

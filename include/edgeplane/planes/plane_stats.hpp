@@ -261,7 +261,8 @@ EDGEPLANE_HD EDGEPLANE_INLINE std::uint64_t mul_fixed(std::uint64_t a, std::uint
 /// complement: wrapping, so the order of additions cannot matter, and the totals fit an int64 by
 /// fixed_point_max_depth).  On the host, runs of 8 pixels whose labels are the current one or 0
 /// are summed lane by lane (vectorizable), a stretch of such blocks at a time (sum_stretch).
-template <class Labels>
+/// Second = false leaves the second-order slots (4..9) at 0: the sums of a centroid and counts.
+template <class Labels, bool Second = true>
 struct moments_kernel {
   image_view<const float> depth;
   Labels label_of;
@@ -348,6 +349,7 @@ struct moments_kernel {
     s[1] += px;
     s[2] += py;
     s[3] += pz;
+    if constexpr (!Second) return;
     s[4] += mul_fixed(px, px);
     s[5] += mul_fixed(px, py);
     s[6] += mul_fixed(px, pz);
@@ -438,12 +440,14 @@ struct moments_kernel {
         a[1][l] += px;
         a[2][l] += py;
         a[3][l] += pz;
-        a[4][l] += mul_fixed(px, px);
-        a[5][l] += mul_fixed(px, py);
-        a[6][l] += mul_fixed(px, pz);
-        a[7][l] += mul_fixed(py, py);
-        a[8][l] += mul_fixed(py, pz);
-        a[9][l] += mul_fixed(pz, pz);
+        if constexpr (Second) {
+          a[4][l] += mul_fixed(px, px);
+          a[5][l] += mul_fixed(px, py);
+          a[6][l] += mul_fixed(px, pz);
+          a[7][l] += mul_fixed(py, py);
+          a[8][l] += mul_fixed(py, pz);
+          a[9][l] += mul_fixed(pz, pz);
+        }
       }
       for (int l = lanes - 1; l >= 0; --l)
         if (lab[l] != 0) {
@@ -494,15 +498,15 @@ struct moments_kernel {
 /// integers and boxes minima and maxima, so any split of the rows gives the same totals.  (A work
 /// item per row kept a GPU's few hundred threads walking 512 pixels each: 0.3 ms a call at
 /// 512x424 on an H200, five or more calls a frame.)
-template <class Labels>
+template <class Labels, bool Second = true>
 struct moments_spans_kernel {
   static constexpr int width = 32;
-  moments_kernel<Labels> m;
+  moments_kernel<Labels, Second> m;
   int spans;  // per row
   EDGEPLANE_HD void operator()(std::int64_t item) const {
     const int y = m.row0 + static_cast<int>(item / spans), xa = static_cast<int>(item % spans) * width;
     const int xb = xa + width < m.depth.width ? xa + width : m.depth.width;
-    typename moments_kernel<Labels>::direct out(&m);
+    typename moments_kernel<Labels, Second>::direct out(&m);
     m.span(y, xa, xb, out);
   }
 };
@@ -530,14 +534,26 @@ struct plane_fit {
   std::array<int, 4> bbox{0, 0, -1, -1};                  ///< min x, min y, max x, max y (pixels)
 };
 
-/// Fits the plane of one label from its moment block (host memory).
-inline plane_fit fit_plane(const std::uint64_t* m, const std::int32_t* bb = nullptr) {
+/// The counts, bounding box and centroid of one label from its moment block (host memory), which
+/// need only the first-order slots (accumulate_first_moments); normal, d and eigenvalues stay 0.
+/// The centroid is set from 3 points on (fit_plane's, exactly).
+inline plane_fit centroid_fit(const std::uint64_t* m, const std::int32_t* bb = nullptr) {
   plane_fit f;
   auto v = [&](int k) { return static_cast<double>(static_cast<std::int64_t>(m[k])); };
   f.points = static_cast<std::int64_t>(m[0]);
   f.pixels = static_cast<std::int64_t>(m[10]);
   if (bb) f.bbox = {bb[0], bb[1], bb[2], bb[3]};
   if (f.points < 3) return f;
+  const double n = v(0), s = 1.0 / fixed_per_metre;
+  f.centroid = Eigen::Vector3d(v(1) / n, v(2) / n, v(3) / n) * s;
+  return f;
+}
+
+/// Fits the plane of one label from its moment block (host memory).
+inline plane_fit fit_plane(const std::uint64_t* m, const std::int32_t* bb = nullptr) {
+  plane_fit f = centroid_fit(m, bb);
+  if (f.points < 3) return f;
+  auto v = [&](int k) { return static_cast<double>(static_cast<std::int64_t>(m[k])); };
   const double n = v(0), s = 1.0 / fixed_per_metre;
   const Eigen::Vector3d mean(v(1) / n, v(2) / n, v(3) / n);
   Eigen::Matrix3d c;
@@ -548,7 +564,6 @@ inline plane_fit fit_plane(const std::uint64_t* m, const std::int32_t* bb = null
   c(1, 2) = c(2, 1) = v(8) / n - mean.y() * mean.z();
   c(2, 2) = v(9) / n - mean.z() * mean.z();
   c *= s * s;
-  f.centroid = mean * s;
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(c);
   // ascending eigenvalues
   f.eigenvalues = Eigen::Vector3d(es.eigenvalues()(2), es.eigenvalues()(1), std::max(0.0, es.eigenvalues()(0)));
@@ -564,10 +579,11 @@ inline plane_fit fit_plane(const std::uint64_t* m, const std::int32_t* bb = null
 /// (row_end < 0: to the last row): for labels known to lie in those rows.  Asynchronous on device
 /// backends.  Precondition: valid depths are at most fixed_point_max_depth(k, w, h) (the
 /// segmenter's depth conversion ensures it), so that the fixed-point sums are exact.
-template <class Backend, class Labels>
+namespace detail {
+template <bool Second, class Backend, class Labels>
 void accumulate_moments(const Backend& b, image_view<const float> depth, const intrinsics& k, Labels label_of,
-                        std::int32_t num_labels, std::uint64_t* moments, std::int32_t* bbox, int row_begin = 0,
-                        int row_end = -1) {
+                        std::int32_t num_labels, std::uint64_t* moments, std::int32_t* bbox, int row_begin,
+                        int row_end) {
   if (row_end < 0 || row_end > depth.height) row_end = depth.height;
   if (row_begin < 0) row_begin = 0;
   b.memset(moments, 0, sizeof(std::uint64_t) * moment_slots * (num_labels + 1));
@@ -577,16 +593,34 @@ void accumulate_moments(const Backend& b, image_view<const float> depth, const i
     // work items where there are that many rows (the CPU backend runs fewer items serially)
     const int rows = row_end - row_begin;
     const int block = Backend::host_accessible && rows >= 128 ? rows / 64 : 1;
-    const detail::moments_kernel<Labels> m{depth, label_of, detail::make_projector(k), num_labels, moments, bbox,
+    const moments_kernel<Labels, Second> m{depth, label_of, make_projector(k), num_labels, moments, bbox,
                                            row_begin, row_end, block};
     if constexpr (Backend::host_accessible) {
       b.for_each_index((rows + block - 1) / block, m);
-    } else {  // device: spans of 32 pixels (detail::moments_spans_kernel)
-      const int spans = (depth.width + detail::moments_spans_kernel<Labels>::width - 1) /
-                        detail::moments_spans_kernel<Labels>::width;
-      b.for_each_index(static_cast<std::int64_t>(rows) * spans, detail::moments_spans_kernel<Labels>{m, spans});
+    } else {  // device: spans of 32 pixels (moments_spans_kernel)
+      constexpr int width = moments_spans_kernel<Labels, Second>::width;
+      const int spans = (depth.width + width - 1) / width;
+      b.for_each_index(static_cast<std::int64_t>(rows) * spans, moments_spans_kernel<Labels, Second>{m, spans});
     }
   }
+}
+}  // namespace detail
+
+template <class Backend, class Labels>
+void accumulate_moments(const Backend& b, image_view<const float> depth, const intrinsics& k, Labels label_of,
+                        std::int32_t num_labels, std::uint64_t* moments, std::int32_t* bbox, int row_begin = 0,
+                        int row_end = -1) {
+  detail::accumulate_moments<true>(b, depth, k, label_of, num_labels, moments, bbox, row_begin, row_end);
+}
+
+/// accumulate_moments without the second-order sums: slots 0..3 and 10 and the boxes as it gives
+/// them, slots 4..9 left 0.  For the counts, centroids and boxes of labels (centroid_fit), at
+/// about two thirds of the work (no products).
+template <class Backend, class Labels>
+void accumulate_first_moments(const Backend& b, image_view<const float> depth, const intrinsics& k, Labels label_of,
+                              std::int32_t num_labels, std::uint64_t* moments, std::int32_t* bbox, int row_begin = 0,
+                              int row_end = -1) {
+  detail::accumulate_moments<false>(b, depth, k, label_of, num_labels, moments, bbox, row_begin, row_end);
 }
 
 }  // namespace edgeplane
