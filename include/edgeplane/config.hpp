@@ -19,6 +19,14 @@
 #else
 #define EDGEPLANE_INLINE inline
 #endif
+// Keeps a rarely taken path out of the hot kernel that calls it (its code would crowd the kernel).
+#if defined(__CUDACC__)
+#define EDGEPLANE_NOINLINE __noinline__
+#elif defined(__GNUC__) || defined(__clang__)
+#define EDGEPLANE_NOINLINE __attribute__((noinline))
+#else
+#define EDGEPLANE_NOINLINE
+#endif
 
 // Unrolls the loop that follows in device code (which keeps small per-thread arrays in registers
 // only when every index is a constant); nothing in host code, whose compilers (nvcc's host pass

@@ -3,6 +3,7 @@
 #include <doctest/doctest.h>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <string>
@@ -287,6 +288,72 @@ TEST_CASE("detect_edges: the 16-pixel row kernel gives the per-pixel kernel's ed
         }
       }
     }
+}
+
+namespace {
+/// The 16-pixel row kernel's and the per-pixel kernel's edge maps of one dense image.
+std::pair<std::vector<std::uint8_t>, std::vector<std::uint8_t>> both_maps(const std::vector<float>& z, int w, int h,
+                                                                          const intrinsics& k, const params& p) {
+  const image_view<const float> zv{z.data(), w, h, w};
+  std::vector<std::uint8_t> rows(z.size(), 0xee), pixels(z.size(), 0xdd);
+  detect_edges(cpu{}, zv, k, p, make_view(rows.data(), w, h));
+  const detail::edge_set set = detail::make_edge_set(p);
+  const auto ev = make_view(pixels.data(), w, h);
+  const cpu serial{cpu::mode::serial};
+  serial.for_each_index(h, detail::interior_rows_kernel{zv, ev, set.reach()});
+  serial.for_each_index(w, detail::interior_columns_kernel{ev, set.reach()});
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) detail::all_edges_kernel{zv, ev, detail::make_projector(k), set, set.reach()}(x, y);
+  return {rows, pixels};
+}
+}  // namespace
+
+TEST_CASE("detect_edges: the row kernel's arm scans decide a point at the straightness bound as the scalar test does") {
+  // A roof whose crease column C is a corner edge; one inner point P of C's left arm is moved
+  // away from the arm's chord until the arm stops being straight.  The depth at which the scalar
+  // test's decision flips is found by bisection over floats; depths within a few thousand ulps of
+  // it put P's distance within the row kernel's 1e-4 band of doubt around the bound, where the
+  // shortcut cannot decide and the exact expression must.  Every pixel must match at each depth.
+  // 21 rows: the vertical and diagonal arms lack the 16 neighbours a corner test needs, so C's
+  // corner bit in the map is the row's decision alone
+  const int w = 64, h = 21, cx = 32, cy = 10, px = cx - 5;
+  const intrinsics k{180.f, 180.f, 31.5f, 10.f};
+  params p = presets::thesis_full();
+  std::vector<float> z(static_cast<std::size_t>(w) * h);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) z[static_cast<std::size_t>(y) * w + x] = 2.0f - 0.01f * static_cast<float>(std::abs(x - cx));
+  const std::size_t ip = static_cast<std::size_t>(cy) * w + px, ic = static_cast<std::size_t>(cy) * w + cx;
+  const float z0 = z[ip];
+  const detail::edge_set set = detail::make_edge_set(p);
+  auto corner_at_c = [&](float zp) {  // the scalar corner test along the row (the diagonals also see the crease)
+    z[ip] = zp;
+    std::vector<std::uint8_t> e(z.size(), 0);
+    detect_edge<direction::horizontal>(cpu{cpu::mode::serial}, image_view<const float>{z.data(), w, h, w}, k,
+                                       set.corner, make_view(e.data(), w, h));
+    return (e[ic] & edge_type::corner::bit) != 0;
+  };
+  REQUIRE(corner_at_c(z0));            // the crease is a corner...
+  REQUIRE(!corner_at_c(z0 + 0.05f));  // ...and no longer with P 5 cm off its arm
+  // bisection over the float bit patterns (ordered as the values for positive floats)
+  std::uint32_t lo = std::bit_cast<std::uint32_t>(z0), hi = std::bit_cast<std::uint32_t>(z0 + 0.05f);
+  while (hi - lo > 1) {
+    const std::uint32_t mid = lo + (hi - lo) / 2;
+    (corner_at_c(std::bit_cast<float>(mid)) ? lo : hi) = mid;
+  }
+  int fired = 0, checked = 0;
+  for (int d = -3000; d <= 3000; d += d > -40 && d < 40 ? 1 : 97) {
+    const float zp = std::bit_cast<float>(static_cast<std::uint32_t>(static_cast<std::int64_t>(lo) + d));
+    z[ip] = zp;
+    const auto maps = both_maps(z, w, h, k, p);
+    CAPTURE(d);
+    CHECK(maps.first == maps.second);
+    const bool fires = corner_at_c(zp);
+    CHECK(((maps.second[ic] & edge_type::corner::bit) != 0) == fires);
+    fired += fires;
+    ++checked;
+  }
+  CHECK(fired > 0);        // both decisions were seen
+  CHECK(fired < checked);
 }
 
 // The row kernel keeps a lane's extrema, corner and curved pre-tests open only where both of its

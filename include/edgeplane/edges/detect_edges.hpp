@@ -470,9 +470,11 @@ struct all_edges_rows_kernel {
   // are masked.  ok[l] is 0 or 1.
 
   // arm_within for every lane with ok[l] set: clears ok[l] where an inner point of the arm of m
-  // neighbours on side s lies beyond t * chord + noise[l] of the chord from c to the arm's end.
-  EDGEPLANE_HD EDGEPLANE_INLINE void arms_within(const lane_points& c, std::ptrdiff_t step, int s, int m,
-                                                 float t, const float* noise, unsigned* ok) const {
+  // neighbours on side s lies beyond t * chord + noise[l] of the chord from c to the arm's end,
+  // with the scalar test's expression, sqrtf(dist2_to_line(p, c, e)) > bound, at every point.
+  // (Out of line: arms_within runs it rarely; inlined four times, it slowed the edge pass by 3 %.)
+  EDGEPLANE_NOINLINE EDGEPLANE_HD void arms_within_exact(const lane_points& c, std::ptrdiff_t step, int s, int m,
+                                                       float t, const float* noise, unsigned* ok) const {
     float cx[Lanes], cy[Lanes], cz[Lanes], ex[Lanes], ey[Lanes], ez[Lanes], bound[Lanes];
     for (int l = 0; l < Lanes; ++l) {
       const point3 p0 = at(c, step, l, 0), e = at(c, step, l, s * m);
@@ -493,6 +495,59 @@ struct all_edges_rows_kernel {
         alive |= ok[l];
       }
       if (!alive) return;
+    }
+  }
+
+  // arms_within_exact's decisions without its division and square root at every point: the
+  // scalar test compares sqrtf(num / l2) with the bound B (num = |(p - c) x (e - c)|^2, l2 =
+  // |e - c|^2, the same floats here).  num < B^2 l2 (1 - 1e-4) means within and num > B^2 l2
+  // (1 + 1e-4) beyond, as the scalar expression decides too: its division and square root round
+  // by half an ulp each and the two limits by a few, far inside the 1e-4 margin, for lanes whose
+  // l2 >= 1e-12, B > 0 and B^2 l2 within [1e-30, 1e30] (normal floats; other lanes are always in
+  // doubt).  A lane still within at the arm's end (no point surely beyond) whose largest num is
+  // not surely within (some point was in doubt) is decided again by arms_within_exact, which then
+  // runs for the initial lanes (rare: 16 doubtful points in 300 000 on a TUM frame).  (The division and square root at every point
+  // cost a tenth of the edge pass on frames with many open corner tests on an Intel Xeon, whose
+  // 16-lane divider is slow.)
+  EDGEPLANE_HD EDGEPLANE_INLINE void arms_within(const lane_points& c, std::ptrdiff_t step, int s, int m,
+                                                 float t, const float* noise, unsigned* ok) const {
+    float cx[Lanes], cy[Lanes], cz[Lanes], ax[Lanes], ay[Lanes], az[Lanes], lo[Lanes], hi[Lanes];
+    float top[Lanes];  // the largest num so far
+    unsigned ok0[Lanes];
+    for (int l = 0; l < Lanes; ++l) {
+      const point3 p0 = at(c, step, l, 0), e = at(c, step, l, s * m);
+      const point3 ab = e - p0;  // dist2_to_line's b - a, once per arm
+      cx[l] = p0.x;
+      cy[l] = p0.y;
+      cz[l] = p0.z;
+      ax[l] = ab.x;
+      ay[l] = ab.y;
+      az[l] = ab.z;
+      const float l2 = dot(ab, ab), bound = t * norm(e - p0) + noise[l];
+      const float b2l2 = bound * bound * l2;
+      const bool sure = (l2 >= 1e-12f) & (bound > 0.f) & (bound < 1e30f) & (b2l2 >= 1e-30f) & (b2l2 <= 1e30f);
+      lo[l] = select_f(sure, b2l2 * 0.9999f, -1.f);     // num >= 0: never below -1
+      hi[l] = select_f(sure, b2l2 * 1.0001f, 3.4e38f);  // nor above the largest float
+      ok0[l] = ok[l];
+      top[l] = 0.f;
+    }
+    for (int k = 1; k < m; ++k) {
+      unsigned alive = 0;
+      for (int l = 0; l < Lanes; ++l) {
+        const point3 ap = at(c, step, l, s * k) - point3{cx[l], cy[l], cz[l]};
+        const point3 cr = cross(ap, point3{ax[l], ay[l], az[l]});
+        const float num = dot(cr, cr);
+        top[l] = num > top[l] ? num : top[l];
+        ok[l] = ok[l] & static_cast<unsigned>(!(num > hi[l]));
+        alive |= ok[l];
+      }
+      if (!alive) return;  // every lane surely beyond at some point
+    }
+    unsigned redo = 0;
+    for (int l = 0; l < Lanes; ++l) redo |= ok[l] & static_cast<unsigned>(!(top[l] < lo[l]));
+    if (redo) {
+      for (int l = 0; l < Lanes; ++l) ok[l] = ok0[l];
+      arms_within_exact(c, step, s, m, t, noise, ok);
     }
   }
 
