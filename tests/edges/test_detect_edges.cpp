@@ -356,6 +356,64 @@ TEST_CASE("detect_edges: the row kernel's arm scans decide a point at the straig
   CHECK(fired < checked);
 }
 
+TEST_CASE("detect_edges: the row kernel's arc test decides a point at its bound as the scalar test does") {
+  // Flat up to column 24, a parabola bending toward the camera after it: column C = 22 is a curved
+  // edge (its right arm the arc, its left arm straight).  One point P of the arc is moved until C
+  // is no longer one, the flip found by bisection over floats: the quarter point (its distance
+  // from the arc's chord falls below 0.6 of the midpoint's), the three-quarter point, and the
+  // midpoint (whose distance the sagitta and both ratios use).  Within a few thousand ulps of a
+  // flip the row kernel's judgement of that condition is in doubt and the exact expressions must
+  // decide.  15 rows: the vertical and diagonal arms lack the 8 neighbours a curved test needs.
+  const int w = 48, h = 15, cy = 7, cx = 22;
+  const intrinsics k{180.f, 180.f, 23.5f, 7.f};
+  const params p = presets::thesis_full();
+  const detail::edge_set set = detail::make_edge_set(p);
+  const std::size_t ic = static_cast<std::size_t>(cy) * w + cx;
+  const struct {
+    int px;
+    float dz;  // a move of P that ends the curved edge at C
+  } moves[] = {{cx + 2, -0.005f}, {cx + 6, -0.02f}, {cx + 4, 0.005f}};
+  for (const auto& mv : moves) {
+    CAPTURE(mv.px);
+    std::vector<float> z(static_cast<std::size_t>(w) * h);
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        const float u = static_cast<float>(std::max(0, x - 24));
+        z[static_cast<std::size_t>(y) * w + x] = 2.0f - 0.004f * u * u;
+      }
+    const std::size_t ip = static_cast<std::size_t>(cy) * w + mv.px;
+    auto curved_at_c = [&](float zp) {  // the scalar curved test along the row
+      z[ip] = zp;
+      std::vector<std::uint8_t> e(z.size(), 0);
+      detect_edge<direction::horizontal>(cpu{cpu::mode::serial}, image_view<const float>{z.data(), w, h, w}, k,
+                                         set.curved, make_view(e.data(), w, h));
+      return (e[ic] & edge_type::curved::bit) != 0;
+    };
+    const float z0 = z[ip], z1 = z0 + mv.dz;
+    REQUIRE(curved_at_c(z0));
+    REQUIRE(!curved_at_c(z1));
+    // bisection over the float bit patterns (ordered as the values for positive floats)
+    std::uint32_t on = std::bit_cast<std::uint32_t>(z0), off = std::bit_cast<std::uint32_t>(z1);
+    while ((on > off ? on - off : off - on) > 1) {
+      const std::uint32_t mid = std::min(on, off) + (on > off ? on - off : off - on) / 2;
+      (curved_at_c(std::bit_cast<float>(mid)) ? on : off) = mid;
+    }
+    int fired = 0, checked = 0;
+    for (int d = -3000; d <= 3000; d += d > -40 && d < 40 ? 1 : 97) {
+      const float zp = std::bit_cast<float>(static_cast<std::uint32_t>(static_cast<std::int64_t>(on) + d));
+      const bool fires = curved_at_c(zp);  // (sets z[ip])
+      const auto maps = both_maps(z, w, h, k, p);
+      CAPTURE(d);
+      CHECK(maps.first == maps.second);
+      CHECK(((maps.second[ic] & edge_type::curved::bit) != 0) == fires);
+      fired += fires;
+      ++checked;
+    }
+    CHECK(fired > 0);
+    CHECK(fired < checked);
+  }
+}
+
 // The row kernel keeps a lane's extrema, corner and curved pre-tests open only where both of its
 // neighbour counts reach the test's arm, comparing 8 count bytes at a time.
 TEST_CASE("swar::bytes_at_least: bit i is byte i >= t, for every count, threshold and byte position") {

@@ -503,10 +503,11 @@ struct all_edges_rows_kernel {
   // |e - c|^2, the same floats here).  num < B^2 l2 (1 - 1e-4) means within and num > B^2 l2
   // (1 + 1e-4) beyond, as the scalar expression decides too: its division and square root round
   // by half an ulp each and the two limits by a few, far inside the 1e-4 margin, for lanes whose
-  // l2 >= 1e-12, B > 0 and B^2 l2 within [1e-30, 1e30] (normal floats; other lanes are always in
-  // doubt).  A lane still within at the arm's end (no point surely beyond) whose largest num is
-  // not surely within (some point was in doubt) is decided again by arms_within_exact, which then
-  // runs for the initial lanes (rare: 16 doubtful points in 300 000 on a TUM frame).  (The division and square root at every point
+  // l2 >= 1e-12, B >= 1e-15 and B^2 l2 within [1e-30, 1e30] (normal floats, the quotient near B^2
+  // too; other lanes are always in doubt).  A lane still within at the arm's end (no point surely
+  // beyond) whose largest num is not surely within (some point was in doubt) is decided again by
+  // arms_within_exact, which then runs for the initial lanes (rare: 16 doubtful points in 300 000
+  // on a TUM frame).  (The division and square root at every point
   // cost a tenth of the edge pass on frames with many open corner tests on an Intel Xeon, whose
   // 16-lane divider is slow.)
   EDGEPLANE_HD EDGEPLANE_INLINE void arms_within(const lane_points& c, std::ptrdiff_t step, int s, int m,
@@ -525,7 +526,7 @@ struct all_edges_rows_kernel {
       az[l] = ab.z;
       const float l2 = dot(ab, ab), bound = t * norm(e - p0) + noise[l];
       const float b2l2 = bound * bound * l2;
-      const bool sure = (l2 >= 1e-12f) & (bound > 0.f) & (bound < 1e30f) & (b2l2 >= 1e-30f) & (b2l2 <= 1e30f);
+      const bool sure = (l2 >= 1e-12f) & (bound >= 1e-15f) & (bound < 1e30f) & (b2l2 >= 1e-30f) & (b2l2 <= 1e30f);
       lo[l] = select_f(sure, b2l2 * 0.9999f, -1.f);     // num >= 0: never below -1
       hi[l] = select_f(sure, b2l2 * 1.0001f, 3.4e38f);  // nor above the largest float
       ok0[l] = ok[l];
@@ -563,6 +564,46 @@ struct all_edges_rows_kernel {
                          (num < l2 * floor2 * 0.9999f);
     const float d2 = select_f(l2 <= 0.f, self, num / l2);  // dist2_to_line's operations
     return !sure_no & (sqrtf(d2) > t * sqrtf(l2) + noise);
+  }
+
+  // A lane's condition where judged without division or square root: yes (1) or no (1) where it
+  // is sure, neither where in doubt.
+  struct lane_judgement {
+    unsigned yes, no;
+  };
+  // farther_lane(p, a, b, t, noise), which is sqrtf(num / l2) > t * sqrtf(l2) + noise = R (its
+  // shortcut's "no" is that expression's answer too), judged from num against R^2 l2 (1 -/+ 1e-4):
+  // the division, the square root of the quotient and R^2 l2 round by a few ulps, far inside the
+  // margin.  Sure only where l2 >= 1e-12, R >= 1e-15 and R^2 l2 lies in [1e-30, 1e30] (so the
+  // quotient near R^2 is a normal float).
+  EDGEPLANE_HD EDGEPLANE_INLINE static lane_judgement farther_judged(float num, float l2, float t, float noise) {
+    const float r = t * sqrtf(l2) + noise;
+    const float r2l2 = r * r * l2;
+    const bool sure = (l2 >= 1e-12f) & (r >= 1e-15f) & (r < 1e30f) & (r2l2 >= 1e-30f) & (r2l2 <= 1e30f);
+    return {static_cast<unsigned>(sure & (num > r2l2 * 1.0001f)), static_cast<unsigned>(sure & (num < r2l2 * 0.9999f))};
+  }
+  // sqrtf(n / l2) >= 0.6f * sqrtf(nm / l2) (two distances to one line, as the arc test compares
+  // them), judged from n against 0.36 nm (1 -/+ 1e-4), sure where l2 lies in [1e-12, 1e10] and nm in
+  // [1e-25, 1e26], so that both quotients are normal floats (or n / l2 is far below the bound).
+  EDGEPLANE_HD EDGEPLANE_INLINE static lane_judgement not_nearer_judged(float n, float nm, float l2) {
+    const float lim = nm * (0.6f * 0.6f);
+    const bool sure = (l2 >= 1e-12f) & (l2 <= 1e10f) & (nm >= 1e-25f) & (nm <= 1e26f);
+    return {static_cast<unsigned>(sure & (n > lim * 1.0001f)), static_cast<unsigned>(sure & (n < lim * 0.9999f))};
+  }
+  // The arc test of one side (sg) for every lane with bit `bit` of maybe[l], with the scalar
+  // test's expressions (the rare lanes the judgements leave in doubt).
+  EDGEPLANE_NOINLINE EDGEPLANE_HD void arcs_exact(const lane_points& c, std::ptrdiff_t step, int sg, int n, int q1,
+                                                  int mid, int q3, float t, const float* noise, const unsigned* maybe,
+                                                  int bit, unsigned* arc) const {
+    for (int l = 0; l < Lanes; ++l) {  // arc_like(nb, sg, noise)
+      const point3 p0 = at(c, step, l, 0), e = at(c, step, l, sg * n);
+      const point3 pm = at(c, step, l, sg * mid);
+      const bool far = farther_lane(pm, p0, e, t, noise[l]);
+      const float dm = sqrtf(dist2_to_line(pm, p0, e));
+      const float d1 = sqrtf(dist2_to_line(at(c, step, l, sg * q1), p0, e));
+      const float d3 = sqrtf(dist2_to_line(at(c, step, l, sg * q3), p0, e));
+      arc[l] = ((maybe[l] >> bit) & 1u) & static_cast<unsigned>(far & (d1 >= 0.6f * dm) & (d3 >= 0.6f * dm));
+    }
   }
 
   // Finishes the open tests along Direction (bits 4 D + j of maybe[l]) and ORs the edge bits into
@@ -614,16 +655,23 @@ struct all_edges_rows_kernel {
       unsigned open = 0;
       for (int side = 0; side < 2; ++side) {
         const int sg = side == 0 ? -1 : 1;
-        for (int l = 0; l < Lanes; ++l) {  // arc_like(nb, sg, noise)
-          const point3 p0 = at(c, step, l, 0), e = at(c, step, l, sg * n);
-          const point3 pm = at(c, step, l, sg * mid);
-          const bool far = farther_lane(pm, p0, e, cu.t_bend, noise_cu[l]);
-          const float dm = sqrtf(dist2_to_line(pm, p0, e));
-          const float d1 = sqrtf(dist2_to_line(at(c, step, l, sg * q1), p0, e));
-          const float d3 = sqrtf(dist2_to_line(at(c, step, l, sg * q3), p0, e));
-          arc[side][l] = ((maybe[l] >> (4 * D + 3)) & 1u) & static_cast<unsigned>(far & (d1 >= 0.6f * dm) & (d3 >= 0.6f * dm));
-          open |= arc[side][l];
+        unsigned doubt = 0;
+        for (int l = 0; l < Lanes; ++l) {  // arc_like(nb, sg, noise), without division or square root where sure
+          const point3 p0 = at(c, step, l, 0), ab = at(c, step, l, sg * n) - p0;
+          const float l2 = dot(ab, ab);
+          const point3 cm = cross(at(c, step, l, sg * mid) - p0, ab), c1 = cross(at(c, step, l, sg * q1) - p0, ab),
+                       c3 = cross(at(c, step, l, sg * q3) - p0, ab);
+          const lane_judgement far = farther_judged(dot(cm, cm), l2, cu.t_bend, noise_cu[l]);
+          const lane_judgement r1 = not_nearer_judged(dot(c1, c1), dot(cm, cm), l2);
+          const lane_judgement r3 = not_nearer_judged(dot(c3, c3), dot(cm, cm), l2);
+          const unsigned bit = (maybe[l] >> (4 * D + 3)) & 1u;
+          arc[side][l] = bit & far.yes & r1.yes & r3.yes;
+          // in doubt: no condition surely false, and one not surely decided
+          doubt |= bit & ((far.no | r1.no | r3.no) ^ 1u) & ((far.yes & r1.yes & r3.yes) ^ 1u);
         }
+        if (doubt)  // rare: the scalar expressions for the whole side
+          arcs_exact(c, step, sg, n, q1, mid, q3, cu.t_bend, noise_cu, maybe, 4 * D + 3, arc[side]);
+        for (int l = 0; l < Lanes; ++l) open |= arc[side][l];
       }
       if (open) {  // straight(nb, side) where either side is arc-like
         for (int side = 0; side < 2; ++side) {
