@@ -291,6 +291,16 @@ TEST_CASE("detect_edges: the 16-pixel row kernel gives the per-pixel kernel's ed
 }
 
 namespace {
+/// Offsets in ulps around a flip found by bisection: every one within 40, then every 97th out to 3000.
+std::vector<int> flip_offsets() {
+  std::vector<int> d;
+  for (int i = -40; i <= 40; ++i) d.push_back(i);
+  for (int i = 41; i <= 3000; i += 97) {
+    d.push_back(i);
+    d.push_back(-i);
+  }
+  return d;
+}
 /// The 16-pixel row kernel's and the per-pixel kernel's edge maps of one dense image.
 std::pair<std::vector<std::uint8_t>, std::vector<std::uint8_t>> both_maps(const std::vector<float>& z, int w, int h,
                                                                           const intrinsics& k, const params& p) {
@@ -341,7 +351,7 @@ TEST_CASE("detect_edges: the row kernel's arm scans decide a point at the straig
     (corner_at_c(std::bit_cast<float>(mid)) ? lo : hi) = mid;
   }
   int fired = 0, checked = 0;
-  for (int d = -3000; d <= 3000; d += d > -40 && d < 40 ? 1 : 97) {
+  for (const int d : flip_offsets()) {
     const float zp = std::bit_cast<float>(static_cast<std::uint32_t>(static_cast<std::int64_t>(lo) + d));
     z[ip] = zp;
     const auto maps = both_maps(z, w, h, k, p);
@@ -353,6 +363,50 @@ TEST_CASE("detect_edges: the row kernel's arm scans decide a point at the straig
     ++checked;
   }
   CHECK(fired > 0);        // both decisions were seen
+  CHECK(fired < checked);
+}
+
+TEST_CASE("detect_edges: the row kernel's corner bend decides a crease at its bound as the scalar test does") {
+  // A shallow V (3 mm a column), too shallow for a corner at its crease C; C is moved deeper until
+  // the bend (C's distance from the chord between C - 8 and C + 8) exceeds the test's bound, while
+  // both arms stay well within their straightness bound.  The flip is found by bisection over
+  // floats; within a few thousand ulps of it the row kernel's judgement of the bend is in doubt
+  // and the exact expression must decide.  21 rows, as above.
+  const int w = 64, h = 21, cx = 32, cy = 10;
+  const intrinsics k{180.f, 180.f, 31.5f, 10.f};
+  const params p = presets::thesis_full();
+  const detail::edge_set set = detail::make_edge_set(p);
+  std::vector<float> z(static_cast<std::size_t>(w) * h);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) z[static_cast<std::size_t>(y) * w + x] = 2.0f - 0.003f * static_cast<float>(std::abs(x - cx));
+  const std::size_t ic = static_cast<std::size_t>(cy) * w + cx;
+  auto corner_at_c = [&](float zc) {  // the scalar corner test along the row
+    z[ic] = zc;
+    std::vector<std::uint8_t> e(z.size(), 0);
+    detect_edge<direction::horizontal>(cpu{cpu::mode::serial}, image_view<const float>{z.data(), w, h, w}, k,
+                                       set.corner, make_view(e.data(), w, h));
+    return (e[ic] & edge_type::corner::bit) != 0;
+  };
+  const float z0 = z[ic];
+  REQUIRE(!corner_at_c(z0));
+  REQUIRE(corner_at_c(z0 + 0.004f));
+  std::uint32_t off = std::bit_cast<std::uint32_t>(z0), on = std::bit_cast<std::uint32_t>(z0 + 0.004f);
+  while (on - off > 1) {
+    const std::uint32_t mid = off + (on - off) / 2;
+    (corner_at_c(std::bit_cast<float>(mid)) ? on : off) = mid;
+  }
+  int fired = 0, checked = 0;
+  for (const int d : flip_offsets()) {
+    const float zc = std::bit_cast<float>(static_cast<std::uint32_t>(static_cast<std::int64_t>(on) + d));
+    const bool fires = corner_at_c(zc);  // (sets z[ic])
+    const auto maps = both_maps(z, w, h, k, p);
+    CAPTURE(d);
+    CHECK(maps.first == maps.second);
+    CHECK(((maps.second[ic] & edge_type::corner::bit) != 0) == fires);
+    fired += fires;
+    ++checked;
+  }
+  CHECK(fired > 0);
   CHECK(fired < checked);
 }
 
@@ -399,7 +453,7 @@ TEST_CASE("detect_edges: the row kernel's arc test decides a point at its bound 
       (curved_at_c(std::bit_cast<float>(mid)) ? on : off) = mid;
     }
     int fired = 0, checked = 0;
-    for (int d = -3000; d <= 3000; d += d > -40 && d < 40 ? 1 : 97) {
+    for (const int d : flip_offsets()) {
       const float zp = std::bit_cast<float>(static_cast<std::uint32_t>(static_cast<std::int64_t>(on) + d));
       const bool fires = curved_at_c(zp);  // (sets z[ip])
       const auto maps = both_maps(z, w, h, k, p);
