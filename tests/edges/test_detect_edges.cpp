@@ -316,6 +316,36 @@ std::pair<std::vector<std::uint8_t>, std::vector<std::uint8_t>> both_maps(const 
     for (int x = 0; x < w; ++x) detail::all_edges_kernel{zv, ev, detail::make_projector(k), set, set.reach()}(x, y);
   return {rows, pixels};
 }
+
+/// Moves pixel i of z (w x h) between depths za and zb, at which the scalar test along the row
+/// (scalar(depth): sets z[i], returns pixel ic's `bit`) decides differently, finds the flip by
+/// bisection over the floats' bit patterns (ordered as the values for positive floats), then
+/// requires at every flip_offsets() depth around it: the row kernel's map = the per-pixel
+/// kernel's, and the map's bit at ic = the scalar test's (the other directions must not fire it).
+template <class Scalar>
+void check_flip(std::vector<float>& z, std::size_t i, float za, float zb, int w, int h, const intrinsics& k,
+                const params& p, std::size_t ic, unsigned bit, Scalar scalar) {
+  const bool at_a = scalar(za);
+  REQUIRE(at_a != scalar(zb));
+  std::uint32_t a = std::bit_cast<std::uint32_t>(za), b = std::bit_cast<std::uint32_t>(zb);
+  while ((a > b ? a - b : b - a) > 1) {
+    const std::uint32_t mid = std::min(a, b) + (a > b ? a - b : b - a) / 2;
+    (scalar(std::bit_cast<float>(mid)) == at_a ? a : b) = mid;
+  }
+  int fired = 0, checked = 0;
+  for (const int d : flip_offsets()) {
+    const bool fires = scalar(std::bit_cast<float>(static_cast<std::uint32_t>(static_cast<std::int64_t>(b) + d)));
+    const auto maps = both_maps(z, w, h, k, p);
+    CAPTURE(d);
+    CHECK(z[i] > 0.f);
+    CHECK(maps.first == maps.second);
+    CHECK(((maps.second[ic] & bit) != 0) == fires);
+    fired += fires;
+    ++checked;
+  }
+  CHECK(fired > 0);  // both decisions were seen
+  CHECK(fired < checked);
+}
 }  // namespace
 
 TEST_CASE("detect_edges: the row kernel's arm scans decide a point at the straightness bound as the scalar test does") {
@@ -328,7 +358,7 @@ TEST_CASE("detect_edges: the row kernel's arm scans decide a point at the straig
   // corner bit in the map is the row's decision alone
   const int w = 64, h = 21, cx = 32, cy = 10, px = cx - 5;
   const intrinsics k{180.f, 180.f, 31.5f, 10.f};
-  params p = presets::thesis_full();
+  const params p = presets::thesis_full();
   std::vector<float> z(static_cast<std::size_t>(w) * h);
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) z[static_cast<std::size_t>(y) * w + x] = 2.0f - 0.01f * static_cast<float>(std::abs(x - cx));
@@ -342,28 +372,8 @@ TEST_CASE("detect_edges: the row kernel's arm scans decide a point at the straig
                                        set.corner, make_view(e.data(), w, h));
     return (e[ic] & edge_type::corner::bit) != 0;
   };
-  REQUIRE(corner_at_c(z0));            // the crease is a corner...
-  REQUIRE(!corner_at_c(z0 + 0.05f));  // ...and no longer with P 5 cm off its arm
-  // bisection over the float bit patterns (ordered as the values for positive floats)
-  std::uint32_t lo = std::bit_cast<std::uint32_t>(z0), hi = std::bit_cast<std::uint32_t>(z0 + 0.05f);
-  while (hi - lo > 1) {
-    const std::uint32_t mid = lo + (hi - lo) / 2;
-    (corner_at_c(std::bit_cast<float>(mid)) ? lo : hi) = mid;
-  }
-  int fired = 0, checked = 0;
-  for (const int d : flip_offsets()) {
-    const float zp = std::bit_cast<float>(static_cast<std::uint32_t>(static_cast<std::int64_t>(lo) + d));
-    z[ip] = zp;
-    const auto maps = both_maps(z, w, h, k, p);
-    CAPTURE(d);
-    CHECK(maps.first == maps.second);
-    const bool fires = corner_at_c(zp);
-    CHECK(((maps.second[ic] & edge_type::corner::bit) != 0) == fires);
-    fired += fires;
-    ++checked;
-  }
-  CHECK(fired > 0);        // both decisions were seen
-  CHECK(fired < checked);
+  REQUIRE(corner_at_c(z0));  // the crease is a corner, and no longer with P 5 cm off its arm:
+  check_flip(z, ip, z0, z0 + 0.05f, w, h, k, p, ic, edge_type::corner::bit, corner_at_c);
 }
 
 TEST_CASE("detect_edges: the row kernel's corner bend decides a crease at its bound as the scalar test does") {
@@ -389,25 +399,7 @@ TEST_CASE("detect_edges: the row kernel's corner bend decides a crease at its bo
   };
   const float z0 = z[ic];
   REQUIRE(!corner_at_c(z0));
-  REQUIRE(corner_at_c(z0 + 0.004f));
-  std::uint32_t off = std::bit_cast<std::uint32_t>(z0), on = std::bit_cast<std::uint32_t>(z0 + 0.004f);
-  while (on - off > 1) {
-    const std::uint32_t mid = off + (on - off) / 2;
-    (corner_at_c(std::bit_cast<float>(mid)) ? on : off) = mid;
-  }
-  int fired = 0, checked = 0;
-  for (const int d : flip_offsets()) {
-    const float zc = std::bit_cast<float>(static_cast<std::uint32_t>(static_cast<std::int64_t>(on) + d));
-    const bool fires = corner_at_c(zc);  // (sets z[ic])
-    const auto maps = both_maps(z, w, h, k, p);
-    CAPTURE(d);
-    CHECK(maps.first == maps.second);
-    CHECK(((maps.second[ic] & edge_type::corner::bit) != 0) == fires);
-    fired += fires;
-    ++checked;
-  }
-  CHECK(fired > 0);
-  CHECK(fired < checked);
+  check_flip(z, ic, z0, z0 + 0.004f, w, h, k, p, ic, edge_type::corner::bit, corner_at_c);
 }
 
 TEST_CASE("detect_edges: the row kernel's arc test decides a point at its bound as the scalar test does") {
@@ -443,28 +435,8 @@ TEST_CASE("detect_edges: the row kernel's arc test decides a point at its bound 
                                          set.curved, make_view(e.data(), w, h));
       return (e[ic] & edge_type::curved::bit) != 0;
     };
-    const float z0 = z[ip], z1 = z0 + mv.dz;
-    REQUIRE(curved_at_c(z0));
-    REQUIRE(!curved_at_c(z1));
-    // bisection over the float bit patterns (ordered as the values for positive floats)
-    std::uint32_t on = std::bit_cast<std::uint32_t>(z0), off = std::bit_cast<std::uint32_t>(z1);
-    while ((on > off ? on - off : off - on) > 1) {
-      const std::uint32_t mid = std::min(on, off) + (on > off ? on - off : off - on) / 2;
-      (curved_at_c(std::bit_cast<float>(mid)) ? on : off) = mid;
-    }
-    int fired = 0, checked = 0;
-    for (const int d : flip_offsets()) {
-      const float zp = std::bit_cast<float>(static_cast<std::uint32_t>(static_cast<std::int64_t>(on) + d));
-      const bool fires = curved_at_c(zp);  // (sets z[ip])
-      const auto maps = both_maps(z, w, h, k, p);
-      CAPTURE(d);
-      CHECK(maps.first == maps.second);
-      CHECK(((maps.second[ic] & edge_type::curved::bit) != 0) == fires);
-      fired += fires;
-      ++checked;
-    }
-    CHECK(fired > 0);
-    CHECK(fired < checked);
+    REQUIRE(curved_at_c(z[ip]));
+    check_flip(z, ip, z[ip], z[ip] + mv.dz, w, h, k, p, ic, edge_type::curved::bit, curved_at_c);
   }
 }
 
