@@ -317,6 +317,20 @@ std::pair<std::vector<std::uint8_t>, std::vector<std::uint8_t>> both_maps(const 
   return {rows, pixels};
 }
 
+/// The scalar test `type` along the row as a function of pixel i's depth: sets z[i] and returns
+/// whether the test fires at pixel ic.
+template <class Type>
+auto row_test(std::vector<float>& z, int w, int h, const intrinsics& k, const Type& type, std::size_t i,
+              std::size_t ic) {
+  return [&z, w, h, k, type, i, ic](float depth) {
+    z[i] = depth;
+    std::vector<std::uint8_t> e(z.size(), 0);
+    detect_edge<direction::horizontal>(cpu{cpu::mode::serial}, image_view<const float>{z.data(), w, h, w}, k, type,
+                                       make_view(e.data(), w, h));
+    return (e[ic] & Type::bit) != 0;
+  };
+}
+
 /// Moves pixel i of z (w x h) between depths za and zb, at which the scalar test along the row
 /// (scalar(depth): sets z[i], returns pixel ic's `bit`) decides differently, finds the flip by
 /// bisection over the floats' bit patterns (ordered as the values for positive floats), then
@@ -365,13 +379,7 @@ TEST_CASE("detect_edges: the row kernel's arm scans decide a point at the straig
   const std::size_t ip = static_cast<std::size_t>(cy) * w + px, ic = static_cast<std::size_t>(cy) * w + cx;
   const float z0 = z[ip];
   const detail::edge_set set = detail::make_edge_set(p);
-  auto corner_at_c = [&](float zp) {  // the scalar corner test along the row (the diagonals also see the crease)
-    z[ip] = zp;
-    std::vector<std::uint8_t> e(z.size(), 0);
-    detect_edge<direction::horizontal>(cpu{cpu::mode::serial}, image_view<const float>{z.data(), w, h, w}, k,
-                                       set.corner, make_view(e.data(), w, h));
-    return (e[ic] & edge_type::corner::bit) != 0;
-  };
+  const auto corner_at_c = row_test(z, w, h, k, set.corner, ip, ic);  // the scalar test along the row
   REQUIRE(corner_at_c(z0));  // the crease is a corner, and no longer with P 5 cm off its arm:
   check_flip(z, ip, z0, z0 + 0.05f, w, h, k, p, ic, edge_type::corner::bit, corner_at_c);
 }
@@ -390,13 +398,7 @@ TEST_CASE("detect_edges: the row kernel's corner bend decides a crease at its bo
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) z[static_cast<std::size_t>(y) * w + x] = 2.0f - 0.003f * static_cast<float>(std::abs(x - cx));
   const std::size_t ic = static_cast<std::size_t>(cy) * w + cx;
-  auto corner_at_c = [&](float zc) {  // the scalar corner test along the row
-    z[ic] = zc;
-    std::vector<std::uint8_t> e(z.size(), 0);
-    detect_edge<direction::horizontal>(cpu{cpu::mode::serial}, image_view<const float>{z.data(), w, h, w}, k,
-                                       set.corner, make_view(e.data(), w, h));
-    return (e[ic] & edge_type::corner::bit) != 0;
-  };
+  const auto corner_at_c = row_test(z, w, h, k, set.corner, ic, ic);  // the scalar test along the row
   const float z0 = z[ic];
   REQUIRE(!corner_at_c(z0));
   check_flip(z, ic, z0, z0 + 0.004f, w, h, k, p, ic, edge_type::corner::bit, corner_at_c);
@@ -428,13 +430,7 @@ TEST_CASE("detect_edges: the row kernel's arc test decides a point at its bound 
         z[static_cast<std::size_t>(y) * w + x] = 2.0f - 0.004f * u * u;
       }
     const std::size_t ip = static_cast<std::size_t>(cy) * w + mv.px;
-    auto curved_at_c = [&](float zp) {  // the scalar curved test along the row
-      z[ip] = zp;
-      std::vector<std::uint8_t> e(z.size(), 0);
-      detect_edge<direction::horizontal>(cpu{cpu::mode::serial}, image_view<const float>{z.data(), w, h, w}, k,
-                                         set.curved, make_view(e.data(), w, h));
-      return (e[ic] & edge_type::curved::bit) != 0;
-    };
+    const auto curved_at_c = row_test(z, w, h, k, set.curved, ip, ic);  // the scalar test along the row
     REQUIRE(curved_at_c(z[ip]));
     check_flip(z, ip, z[ip], z[ip] + mv.dz, w, h, k, p, ic, edge_type::curved::bit, curved_at_c);
   }
