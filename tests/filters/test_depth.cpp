@@ -289,6 +289,60 @@ TEST_CASE("smooth_depth: the 16-pixel row kernel equals the per-pixel kernel bit
       }
 }
 
+// The row kernel leaves out a tap's own z > 0 test in runs where every valid centre's tolerance
+// is below its depth (|z - zc| <= tol then rejects z <= 0 by itself).  Here the tolerance
+// k (s0 + s2 zc^2) is about 0.03 m and the depths lie between 0.005 and 0.06 m, so runs mix
+// lanes whose tolerance is below their depth with lanes whose tolerance reaches past it (a
+// zero, negative or -0 tap is within that tolerance and must still be skipped); every third row
+// lies beyond it (runs that leave the test out).  The taps include negative depths, -0, NaN and
+// infinities (an infinite centre's tolerance is NaN: no tap is taken, and both kernels give 0).
+// Bit for bit as the per-pixel kernel.
+TEST_CASE("smooth_depth: the row kernel equals the per-pixel kernel where tolerances reach past the depth") {
+  lcg_noise noise(12);
+  int wide_runs = 0, narrow_runs_with_odd_taps = 0;
+  for (const int w : {16, 33, 67})
+    for (const int r : {1, 2, 3}) {
+      const int h = 11;
+      CAPTURE(w);
+      CAPTURE(r);
+      std::vector<float> in(static_cast<std::size_t>(w) * h);
+      for (std::size_t i = 0; i < in.size(); ++i) {
+        const float u = noise(1.f);
+        const int kind = static_cast<int>(i * 7919 % 23);
+        in[i] = kind == 0   ? 0.f
+                : kind == 1 ? -0.f
+                : kind == 2 ? -0.01f
+                : kind == 3 ? std::numeric_limits<float>::quiet_NaN()
+                : kind == 4 ? std::numeric_limits<float>::infinity()
+                : kind == 5 ? -std::numeric_limits<float>::infinity()
+                : i / w % 3 == 0 ? 0.045f + 0.01f * u  // rows of depths beyond the tolerance
+                            : 0.0325f + 0.0275f * u;  // 0.005 .. 0.06 m
+      }
+      const float k = 2.f, s0 = 0.015f, s2 = 0.f;  // tol = 0.03 m
+      for (int y = 0; y < h; ++y)  // which runs take which path (so the test covers both)
+        for (int x0 = 0; x0 + 16 <= w; x0 += 16) {
+          bool wide = false, odd = false;
+          for (int l = 0; l < 16; ++l) {
+            const float z = in[static_cast<std::size_t>(y) * w + x0 + l];
+            wide |= z > 0.f && !(k * (s0 + s2 * z * z) < z);
+            odd |= !(z > 0.f);
+          }
+          wide_runs += wide;
+          narrow_runs_with_odd_taps += !wide && odd;
+        }
+      std::vector<float> a(in.size(), -1.f), c(in.size(), -2.f);
+      const detail::smooth_kernel px{make_view<const float>(in.data(), w, h), make_view(a.data(), w, h), r, k, s0, s2};
+      for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) px(x, y);
+      smooth_depth(cpu{}, make_view<const float>(in.data(), w, h), make_view(c.data(), w, h), r, k, s0, s2);
+      int differ = 0;
+      for (std::size_t i = 0; i < in.size(); ++i) differ += std::memcmp(&a[i], &c[i], sizeof(float)) != 0;
+      CHECK(differ == 0);
+    }
+  CHECK(wide_runs > 10);
+  CHECK(narrow_runs_with_odd_taps > 0);
+}
+
 TEST_CASE("close_depth: the host row kernels give the per-pixel kernels' depths, bit for bit, in place too") {
   // Random holes (single pixels, short runs, blocks, whole 32-pixel blocks and stretches longer
   // than a 256-pixel chunk, each row edge) over a noisy plane; widths around the 32-pixel block

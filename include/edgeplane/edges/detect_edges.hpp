@@ -176,7 +176,11 @@ struct valid_runs_rows_kernel {
   EDGEPLANE_HOST_CLONES EDGEPLANE_HD void operator()(std::int64_t row) const {
     const int y = static_cast<int>(row), w = depth.width;
     std::uint8_t* vr = valid + static_cast<std::int64_t>(y) * w;
-    for (int x = 0; x < w; ++x) vr[x] = static_cast<std::uint8_t>(0u - static_cast<unsigned>(depth(x, y) > 0.f));
+    // From a local row pointer: through depth(x, y), every byte store may alias the view's own
+    // data pointer and pitch, so g++ reloaded them per pixel and kept the loop scalar (one byte
+    // store per pixel, which the block loads below then waited on).
+    const float* drow = &depth(0, y);
+    for (int x = 0; x < w; ++x) vr[x] = static_cast<std::uint8_t>(0u - static_cast<unsigned>(drow[x] > 0.f));
     if (points != nullptr) {
       float* zs = points + at.z + at.offset(0, y);
       float* xs = points + at.x + at.offset(0, y);

@@ -156,7 +156,7 @@ struct downscale_kernel {
         s += z;
         ++n;
       }
-    out(x, y) = s / static_cast<float>(n);
+    out(x, y) = n > 0 ? s / static_cast<float>(n) : 0.f;  // no tap taken (a NaN or negative tolerance): 0
   }
 };
 
@@ -224,7 +224,7 @@ struct smooth_kernel {
           n += take ? 1 : 0;
         }
       }
-      out(x, y) = s / static_cast<float>(n);
+      out(x, y) = n > 0 ? s / static_cast<float>(n) : 0.f;  // no tap taken (a NaN or negative tolerance): 0
       return;
     }
     for (int dy = -r; dy <= r; ++dy)
@@ -236,7 +236,7 @@ struct smooth_kernel {
             ++n;
           }
         }
-    out(x, y) = s / static_cast<float>(n);
+    out(x, y) = n > 0 ? s / static_cast<float>(n) : 0.f;  // no tap taken (a NaN or negative tolerance): 0
   }
   /// Host runs of Lanes pixels (see window_runs), c[0..Lanes-1] into o[0..Lanes-1] (rows pitch
   /// elements apart, their windows readable): the lanes advance together through the window, each
@@ -252,6 +252,24 @@ struct smooth_kernel {
       sum[l] = 0.f;
       cnt[l] = 0.f;
     }
+    unsigned wide = 0;  // some valid centre's tolerance not below its depth (as bits: a bool's
+    EDGEPLANE_VECTOR_LOOP  // &= became a branch per lane)
+    for (int l = 0; l < Lanes; ++l) wide |= static_cast<unsigned>((zc[l] > 0.f) & !(tol[l] < zc[l]));
+    // Where a valid centre's tolerance is below its depth, a tap's own test z > 0 decides nothing:
+    // for z <= 0 the rounded z - zc is at most -zc (rounding is monotonic and -zc is a float), so
+    // |z - zc| >= zc > tol already rejects it, and a NaN tap fails both.  Lanes with an invalid
+    // centre give 0 whatever they sum.  So runs where every lane is so (all but absurd noise
+    // parameters) leave that comparison out; the decisions are the same.
+    if (!wide)
+      sum_window<Lanes, false>(c, pitch, zc, tol, sum, cnt);
+    else
+      sum_window<Lanes, true>(c, pitch, zc, tol, sum, cnt);
+    // an invalid centre, or no tap taken (cnt 0: the division's NaN is not selected), gives 0
+    for (int l = 0; l < Lanes; ++l) o[l] = select_f((zc[l] > 0.f) & (cnt[l] > 0.f), sum[l] / cnt[l], 0.f);
+  }
+  template <int Lanes, bool CheckTap>
+  EDGEPLANE_HD EDGEPLANE_INLINE void sum_window(const float* c, std::ptrdiff_t pitch, const float* zc, const float* tol,
+                                                float* sum, float* cnt) const {
     for (int dy = -r; dy <= r; ++dy) {
       const float* row = c + dy * pitch - r;
       for (int j = 0; j <= 2 * r; ++j)
@@ -260,13 +278,12 @@ struct smooth_kernel {
           // z or +0 (adding +0 leaves a sum of non-negative depths as it is), selected by bits:
           // g++ turns `take ? z : 0.f` into branches for AVX2 and SSE targets (only the AVX-512
           // clone stayed vector), which made this loop scalar and data-dependent
-          const bool take = (z > 0.f) & (fabsf(z - zc[l]) <= tol[l]);
+          const bool near = fabsf(z - zc[l]) <= tol[l];
+          const bool take = CheckTap ? (z > 0.f) & near : near;
           sum[l] += select_f(take, z, 0.f);
           cnt[l] += select_f(take, 1.f, 0.f);
         }
     }
-    // an invalid centre, or no tap taken (cnt 0: the division's NaN is not selected), gives 0
-    for (int l = 0; l < Lanes; ++l) o[l] = select_f((zc[l] > 0.f) & (cnt[l] > 0.f), sum[l] / cnt[l], 0.f);
   }
 };
 
