@@ -495,7 +495,7 @@ TEST_CASE("swar::nonzero_bytes: bit i is byte i != 0, for every byte value and p
 // many consecutive valid pixels follow it on side s of direction d (at most r, stopping at the
 // border), counted here one by one.
 TEST_CASE("valid_runs kernels count each pixel's valid neighbours on all eight sides") {
-  // bands of 32 rows: a band boundary, and a short last band; 70 columns: every 64-pixel block of
+  // bands of 8, 16 and 32 rows: band boundaries, and a short last band; 70 columns: every 64-pixel block of
   // the rows pass has its window cut by the row's ends; 230: blocks that read the row in place;
   // 207: at r = 16 the block at 128 ends its window one pixel past the row (so it must copy)
   for (const int w : {70, 207, 230}) {
@@ -508,12 +508,14 @@ TEST_CASE("valid_runs kernels count each pixel's valid neighbours on all eight s
   for (int y = 0; y < 30; ++y) z[static_cast<std::size_t>(y) * w + 50] = 0.f;
   const auto zv = make_view<const float>(z.data(), w, h);
   const int dxs[4] = {1, 0, 1, -1}, dys[4] = {0, 1, 1, 1};  // horizontal, vertical, left and right diagonal
+  for (const int band : {8, 16, 32})
   for (const int r : {1, 5, 16, 32}) {
+    CAPTURE(band);
     CAPTURE(r);
     std::vector<std::uint8_t> runs(static_cast<std::size_t>(8) * w * h, 0xab), valid(static_cast<std::size_t>(w) * h, 0xa5);  // garbage with bit 0 set: read as valid
     const cpu b{};
     b.for_each_index(h, detail::valid_runs_rows_kernel{zv, runs.data(), r, valid.data()});
-    b.for_each_index(6 * ((h + 31) / 32), detail::valid_runs_bands_kernel{zv, runs.data(), r, 32, valid.data()});
+    b.for_each_index(6 * ((h + band - 1) / band), detail::valid_runs_bands_kernel{zv, runs.data(), r, band, valid.data()});
     int wrong_valid = 0;
     for (int i = 0; i < w * h; ++i)
       wrong_valid += valid[static_cast<std::size_t>(i)] != (z[static_cast<std::size_t>(i)] > 0.f ? 0xff : 0);
@@ -536,6 +538,22 @@ TEST_CASE("valid_runs kernels count each pixel's valid neighbours on all eight s
     CHECK(wrong == 0);
     CHECK(full > 0);  // not all counts cut short
   }
+  }
+}
+
+TEST_CASE("valid_runs_band: bands of 32 rows, shorter where the six planes would make too few work items") {
+  // The CPU backend runs fewer than host_parallel_items work items on one core.
+  CHECK(detail::valid_runs_band(424) == 32);
+  CHECK(detail::valid_runs_band(480) == 32);
+  CHECK(detail::valid_runs_band(212) == 16);  // 42 work items of 32 rows
+  CHECK(detail::valid_runs_band(1) == 8);
+  for (int h = 1; h <= 1000; ++h) {
+    const int band = detail::valid_runs_band(h);
+    CAPTURE(h);
+    REQUIRE((band == 8 || band == 16 || band == 32));
+    const std::int64_t items = 6 * ((h + band - 1) / band);
+    CHECK((items >= detail::host_parallel_items || band == 8));  // enough items, or the shortest band
+    if (band < 32) CHECK(6 * ((h + 2 * band - 1) / (2 * band)) < detail::host_parallel_items);  // no longer band would do
   }
 }
 

@@ -239,6 +239,16 @@ struct valid_runs_rows_kernel {
     }
   }
 };
+/// Rows per work item of valid_runs_bands_kernel for an image h rows high: 32, halved (to 8 at
+/// least) until the six planes' bands make host_parallel_items work items, since the CPU backend
+/// runs fewer serially (a 256x212 frame made 42 of 32 rows).  Each band counts its first row's
+/// neighbours one step at a time, so shorter bands cost more in all, but on every core.
+inline int valid_runs_band(int h) {
+  int band = 32;
+  while (band > 8 && 6 * ((static_cast<std::int64_t>(h) + band - 1) / band) < host_parallel_items) band /= 2;
+  return band;
+}
+
 /// The vertical and diagonal planes: one work item per band of `band` rows.  A row's count is the
 /// previous row's count at (x - dx) plus one where that pixel is valid (the next row's for the
 /// right side), so only each band's first row (last, for the right side) counts its neighbours
@@ -916,7 +926,7 @@ void detect_edges(const Backend& b, image_view<const float> depth, const intrins
     std::uint8_t* runs = scratch;
     std::uint8_t* valid = scratch + at.valid;
     float* points = reinterpret_cast<float*>(scratch + at.points);
-    constexpr int band = 32;
+    const int band = detail::valid_runs_band(h);
     const detail::edge_points_layout points_at(w, h, reach);
     b.for_each_index(h, detail::valid_runs_rows_kernel{depth, runs, reach, valid, px.proj, points, points_at});
     b.for_each_index(6 * ((h + band - 1) / band), detail::valid_runs_bands_kernel{depth, runs, reach, band, valid});
