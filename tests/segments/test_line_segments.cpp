@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -319,6 +320,30 @@ TEST_CASE_TEMPLATE("extract_segments: the host's walk of diagonals in blocks kee
       }
     CHECK(differ == 0);
     kept_total += kept;
+    // Each block width over 1, 2, 3 and 7 bands of rows (runs that cross a band's first row, start
+    // on it, or end on it; bands of one row or none where the image is short), in reverse order
+    // of the work items: the same covered pixels.
+    const auto banded = [&](auto lanes, int bands) {
+      constexpr int L = decltype(lanes)::value;
+      std::vector<std::uint8_t> out(depth.size(), 0);
+      const std::int64_t blocks = (detail::diagonal_count(w, h) + L - 1) / L;
+      const detail::diagonal_block_runs_kernel<D, L> walk{
+          {one.depth, one.mask, image_view<std::uint8_t>{out.data(), w, h, pitch}, one.proj, one.t_length, one.max_splits,
+           one.test},
+          blocks,
+          bands};
+      for (std::int64_t i = blocks * bands - 1; i >= 0; --i) walk(i);
+      int wrong = 0;
+      for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) wrong += out[static_cast<std::size_t>(y) * pitch + x] != want[static_cast<std::size_t>(y) * pitch + x];
+      return wrong;
+    };
+    for (const int bands : {1, 2, 3, 7}) {
+      CAPTURE(bands);
+      CHECK(banded(std::integral_constant<int, 4>{}, bands) == 0);
+      CHECK(banded(std::integral_constant<int, 8>{}, bands) == 0);
+      CHECK(banded(std::integral_constant<int, 16>{}, bands) == 0);
+    }
   }
   CHECK(kept_total > 20000);
 }
