@@ -60,7 +60,9 @@ struct grow_kernel {
       }
     }
     out(x, y) = best;
-    if (best != 0) atomic_store(changed, 1);
+    // stored only while unset: a store per labelled pixel from every core made the flag's cache
+    // line move between the cores at each one
+    if (best != 0 && atomic_load(changed) == 0) atomic_store(changed, 1);
   }
 };
 
