@@ -276,8 +276,8 @@ TEST_CASE_TEMPLATE("extract_segments: the host's walk of diagonals in blocks kee
   // (a block that read past its row would join runs across it). The sizes take each block width
   // (4, 8 and 16 diagonals), blocks that lie partly or wholly outside the image, and the walk by
   // single diagonals of small images.
-  const std::pair<int, int> sizes[] = {{1, 1},    {1, 40},    {40, 1},    {5, 3},   {3, 29},
-                                       {37, 29},  {200, 150}, {150, 200}, {300, 250}, {600, 500}};
+  const std::pair<int, int> sizes[] = {{1, 1},    {1, 40},    {40, 1},    {5, 3},     {3, 29},    {37, 29},
+                                       {400, 30}, {200, 150}, {150, 200}, {300, 250}, {600, 500}};
   const std::uint8_t edge_values[] = {1, 2, 0x80, 0xff};
   edgeplane::test::noise_source rng{11};
   int kept_total = 0;

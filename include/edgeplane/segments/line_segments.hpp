@@ -349,20 +349,22 @@ void extract_segments(const Backend& b, image_view<const float> depth, image_vie
     for (int y = 0; y < covered.height; ++y)
       b.memset(covered.data + static_cast<std::ptrdiff_t>(y) * covered.pitch, 0, static_cast<std::size_t>(covered.width));
   const std::int64_t n = detail::diagonal_count(depth.width, depth.height);
-  // host: L diagonals a work item, keeping 64 work items or more (the CPU backend runs fewer
-  // serially); small images, a diagonal a work item.  Frames of 256 rows or more are walked in
-  // two bands, the top half's items first: the row passes before this one left each half in
-  // the cache of the core that wrote it (segments on two cores: -7 % on kinect2 scene 0, -10 %
-  // on the TUM frame; four bands were no better there; at 212 rows the pipeline did not change
-  // and the walk alone was slower).
+  // host: L diagonals over one of two bands of rows a work item, keeping 64 work items or more
+  // (the CPU backend runs fewer serially); small images, a diagonal a work item.  Frames of 64
+  // rows or more are walked in two bands, the top half's items first: the row passes before this
+  // one left each half in the cache of the core that wrote it (segments on two cores: -7 % on
+  // kinect2 scene 0, -10 % on the TUM frame; four bands were no better there).  Counting both
+  // bands' items, 512x424 takes blocks of 16 diagonals and 256x212 blocks of 8 (the pipeline
+  // 3 % and 2 % faster; the walk alone, without the row passes before it, is 12 % slower at
+  // 256x212).
   if constexpr (Backend::host_accessible) {
-    const int bands = depth.height >= 256 ? 2 : 1;
+    const int bands = depth.height >= 64 ? 2 : 1;
     const auto blocks = [&](int lanes) { return (n + lanes - 1) / lanes; };
-    if (n >= detail::host_parallel_items * 16)
+    if (n * bands >= detail::host_parallel_items * 16)
       b.for_each_index(bands * blocks(16), detail::diagonal_block_runs_kernel<Direction, 16>{f, blocks(16), bands});
-    else if (n >= detail::host_parallel_items * 8)
+    else if (n * bands >= detail::host_parallel_items * 8)
       b.for_each_index(bands * blocks(8), detail::diagonal_block_runs_kernel<Direction, 8>{f, blocks(8), bands});
-    else if (n >= detail::host_parallel_items * 4)
+    else if (n * bands >= detail::host_parallel_items * 4)
       b.for_each_index(bands * blocks(4), detail::diagonal_block_runs_kernel<Direction, 4>{f, blocks(4), bands});
     else
       b.for_each_index(n, f);
