@@ -81,9 +81,16 @@ inline constexpr int row_lanes = Backend::host_accessible ? 16 : 1;
 /// where the data allows.
 inline constexpr std::int64_t host_parallel_items = 64;
 
+/// Whether a kernel declares `static constexpr bool even_work = true`: its work items cost about
+/// the same (rows of a cheap pass, blocks sized to equal work), so the CPU backend hands each
+/// thread a few contiguous runs of them instead of letting TBB split the range item by item.
+template <class F>
+inline constexpr bool even_work_v = requires { requires F::even_work; };
+
 /// f(x, y) for every pixel of row `row`: host backends' work item of for_each_pixel.
 template <class F>
 struct pixel_rows {
+  static constexpr bool even_work = even_work_v<F>;
   F f;
   int w;
   EDGEPLANE_HD void operator()(std::int64_t row) const {

@@ -166,6 +166,7 @@ struct edge_points_layout {
 /// they may look at without a bounds check.  Item 0 also zeroes the padding rows above the image,
 /// item h - 1 those below.
 struct valid_runs_rows_kernel {
+  static constexpr bool even_work = true;  // see detail::even_work_v
   image_view<const float> depth;
   std::uint8_t* runs;
   int r;
@@ -255,6 +256,7 @@ inline int valid_runs_band(int h) {
 /// one by one.  Validity comes from the byte plane valid_runs_rows_kernel writes (byte
 /// operations only: 64 pixels per AVX-512 instruction).  1 <= r <= 127.
 struct valid_runs_bands_kernel {
+  static constexpr bool even_work = true;  // see detail::even_work_v
   image_view<const float> depth;
   std::uint8_t* runs;
   int r, band;
@@ -839,6 +841,7 @@ struct mask_erode_kernel {
 /// dilation ORs in the taps (then 1 where any is set), the erosion ANDs them with the centre.
 template <bool Dilate>
 struct mask_rows_kernel {
+  static constexpr bool even_work = true;  // see detail::even_work_v
   image_view<const std::uint8_t> in;
   image_view<std::uint8_t> out;
   int r;

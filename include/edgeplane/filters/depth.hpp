@@ -15,6 +15,7 @@ namespace detail {
 /// negatives and values outside [min_depth, max_depth] become 0 (invalid).
 template <class In>
 struct convert_depth_kernel {
+  static constexpr bool even_work = true;  // see detail::even_work_v
   image_view<const In> in;
   image_view<float> out;
   float scale;  // metres per unit
@@ -84,6 +85,7 @@ struct depth_erode_kernel {
 /// float.  `out` may be `in` (erosion: a row reads only its own original depth).
 template <bool Dilate>
 struct depth_rows_kernel {
+  static constexpr bool even_work = true;  // see detail::even_work_v
   image_view<const float> in;       // the depth before the closing
   image_view<const float> dilated;  // the dilation's output (erosion only)
   image_view<float> out;

@@ -14,6 +14,7 @@ namespace edgeplane::detail {
 /// labels(i) = table[source(i)] (source gives 1-based candidate ids; table[0] = 0).
 template <class Source>
 struct relabel_kernel {
+  static constexpr bool even_work = true;  // see detail::even_work_v
   Source source;
   const std::uint16_t* table;
   image_view<std::uint16_t> labels;
@@ -331,6 +332,7 @@ struct label_erode_kernel {
 /// where the whole window is labelled in the dilated image; original labels are kept.
 template <bool Dilate>
 struct label_rows_kernel {
+  static constexpr bool even_work = true;  // see detail::even_work_v
   image_view<const std::uint16_t> original;  // the labels before the closing
   image_view<const std::uint16_t> dilated;   // the dilation's output (erosion only)
   image_view<std::uint16_t> out;

@@ -250,6 +250,7 @@ struct run_starts_kernel {
 /// order, each writing only its own pixels of `covered`.
 template <class Direction, int L>
 struct diagonal_block_runs_kernel {
+  static constexpr bool even_work = true;  // see detail::even_work_v
   static_assert(L >= 1 && L <= 32, "one bit per lane in an unsigned");
   diagonal_runs_kernel<Direction, true> walk;
   /// Work item i walks block i % blocks over band i / blocks of `bands` bands of rows (band b:
