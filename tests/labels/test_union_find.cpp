@@ -469,19 +469,24 @@ TEST_CASE_TEMPLATE("grid4_adjacency: components equal a serial union-find on ran
   // joining is not transitive), random holes, odd sizes, single rows and columns; the serial
   // reference unites every pair the adjacency names.  Widths of whole 16-pixel blocks and tails
   // (the host's lanes of joins), and sparse holes that leave long runs lying on runs (the host
-  // skips the vertical pairs already joined through their left neighbours).
+  // skips the vertical pairs already joined through their left neighbours).  With `fresh` < 1 a
+  // pixel mostly keeps its left neighbour's level: whole 16-pixel blocks then join into one run,
+  // and runs cross blocks, which the host passes take in one step.
   lcg_noise rng(17);
-  for (const auto& [w, h] :
-       {std::pair{1, 1}, std::pair{1, 9}, std::pair{13, 1}, std::pair{37, 23}, std::pair{64, 40}, std::pair{100, 30}}) {
-    for (const double holes : {0.0, 0.02, 0.2, 0.6}) {
+  for (const auto& [w, h] : {std::pair{1, 1}, std::pair{1, 9}, std::pair{13, 1}, std::pair{37, 23}, std::pair{64, 40},
+                             std::pair{100, 30}, std::pair{161, 12}}) {
+    for (const double holes : {0.0, 0.02, 0.2, 0.6})
+    for (const double fresh : {1.0, 0.02}) {
       CAPTURE(w);
       CAPTURE(h);
       CAPTURE(holes);
+      CAPTURE(fresh);
       const std::size_t n = static_cast<std::size_t>(w) * h;
       std::vector<float> depth(n);
       std::vector<std::uint8_t> cov(n);
       for (std::size_t i = 0; i < n; ++i) {
-        depth[i] = 1.f + 0.04f * static_cast<float>(rng.next_u32(4));
+        const bool keep = i % static_cast<std::size_t>(w) != 0 && rng.uniform01() >= fresh;
+        depth[i] = keep ? depth[i - 1] : 1.f + 0.04f * static_cast<float>(rng.next_u32(4));
         cov[i] = rng.uniform01() < holes ? 0 : 1;
       }
       const detail::covered_active host_active{cov.data(), nullptr};
