@@ -1,7 +1,7 @@
 // The CPU backend's for_each_index must call f(i) exactly once for every i in [0, n), in both of
 // its parallel paths: TBB's own partitioning, and contiguous chunks for kernels that declare
 // even_work (detail::even_work_v).  Counts below, at and above the parallel threshold, around the
-// number of chunks (4 per hardware thread) and far above it.
+// number of chunks (cpu::chunks_per_thread per hardware thread) and far above it.
 #include <doctest/doctest.h>
 
 #include <atomic>
@@ -51,7 +51,7 @@ bool each_once(const cpu& b, std::int64_t n) {
 }  // namespace
 
 TEST_CASE("cpu::for_each_index: every index exactly once, chunked or not, serial or parallel") {
-  const std::int64_t k = 4 * cpu::hardware_threads();
+  const std::int64_t k = cpu::chunks_per_thread * cpu::hardware_threads();
   CHECK(cpu::hardware_threads() >= 1);
   std::vector<std::int64_t> counts = {1, 2, 63, 64, 65, 100, 424, 1000, 4099, 100003};
   for (const std::int64_t d : {-1, 0, 1}) counts.push_back(std::max<std::int64_t>(1, k + d));

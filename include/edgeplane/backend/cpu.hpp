@@ -27,8 +27,8 @@ struct cpu {
   /// Calls f(i) for i in [0, n).  f may run concurrently on several threads; it must only use
   /// edgeplane's atomic helpers for shared writes.  Synchronous.
   ///
-  /// A kernel whose items cost alike (detail::even_work_v) runs as 4 contiguous chunks per
-  /// hardware thread: TBB's default partitioning splits the range item by item on demand, which
+  /// A kernel whose items cost alike (detail::even_work_v) runs as chunks_per_thread contiguous
+  /// chunks per hardware thread: TBB's default partitioning splits the range item by item on demand, which
   /// cost about 4 us per call on the 2-core VM against about 1 us for a few chunks, and gives
   /// neighbouring items (rows, blocks of diagonals) to different threads.
   template <class F>
@@ -38,7 +38,7 @@ struct cpu {
     if (execution == mode::serial || n < detail::host_parallel_items) {
       std::for_each(first, last, f);
     } else if constexpr (detail::even_work_v<F>) {
-      const std::int64_t k = std::min<std::int64_t>(n, 4 * hardware_threads());
+      const std::int64_t k = std::min<std::int64_t>(n, chunks_per_thread * hardware_threads());
       detail::counting_iterator c0(0), c1(k);
       std::for_each(std::execution::par, c0, c1, [n, k, &f](std::int64_t c) {
         for (std::int64_t i = n * c / k, e = n * (c + 1) / k; i < e; ++i) f(i);
@@ -47,6 +47,10 @@ struct cpu {
       std::for_each(std::execution::par, first, last, f);
     }
   }
+
+  /// Chunks per hardware thread for even_work kernels (a thread held up elsewhere then delays a
+  /// quarter of its share, not all of it).
+  static constexpr std::int64_t chunks_per_thread = 4;
 
   /// The machine's hardware threads (at least 1), read once.
   static std::int64_t hardware_threads() {
