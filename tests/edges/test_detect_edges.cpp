@@ -412,28 +412,79 @@ TEST_CASE("detect_edges: the row kernel's arc test decides a point at its bound 
   // midpoint (whose distance the sagitta and both ratios use).  Within a few thousand ulps of a
   // flip the row kernel's judgement of that condition is in doubt and the exact expressions must
   // decide.  15 rows: the vertical and diagonal arms lack the 8 neighbours a curved test needs.
-  const int w = 48, h = 15, cy = 7, cx = 22;
-  const intrinsics k{180.f, 180.f, 23.5f, 7.f};
+  // Mirrored too (the arc on C's left): the row kernel judges each arc's sagitta once for both of
+  // its ends (arc_flat_rows_kernel), from differences taken about the midpoint, which neither
+  // end's scalar test takes.
+  const int w = 48, h = 15, cy = 7;
+  const intrinsics k{180.f, 180.f, 23.5f, 7.f};  // the principal point mid-row: the mirror is exact
   const params p = presets::thesis_full();
   const detail::edge_set set = detail::make_edge_set(p);
-  const std::size_t ic = static_cast<std::size_t>(cy) * w + cx;
   const struct {
     int px;
     float dz;  // a move of P that ends the curved edge at C
-  } moves[] = {{cx + 2, -0.005f}, {cx + 6, -0.02f}, {cx + 4, 0.005f}};
+  } moves[] = {{2, -0.005f}, {6, -0.02f}, {4, 0.005f}};  // P's column: C's, this many columns into the arc
+  for (const bool mirror : {false, true})
   for (const auto& mv : moves) {
-    CAPTURE(mv.px);
+    const auto col = [&](int x) { return mirror ? w - 1 - x : x; };
+    const int cx = col(22), px = col(22 + mv.px);
+    CAPTURE(mirror);
+    CAPTURE(px);
+    const std::size_t ic = static_cast<std::size_t>(cy) * w + cx;
     std::vector<float> z(static_cast<std::size_t>(w) * h);
     for (int y = 0; y < h; ++y)
       for (int x = 0; x < w; ++x) {
-        const float u = static_cast<float>(std::max(0, x - 24));
+        const float u = static_cast<float>(std::max(0, col(x) - 24));
         z[static_cast<std::size_t>(y) * w + x] = 2.0f - 0.004f * u * u;
       }
-    const std::size_t ip = static_cast<std::size_t>(cy) * w + mv.px;
+    const std::size_t ip = static_cast<std::size_t>(cy) * w + px;
     const auto curved_at_c = row_test(z, w, h, k, set.curved, ip, ic);  // the scalar test along the row
     REQUIRE(curved_at_c(z[ip]));
     check_flip(z, ip, z[ip], z[ip] + mv.dz, w, h, k, p, ic, edge_type::curved::bit, curved_at_c);
   }
+}
+
+TEST_CASE("arc_flat_rows_kernel: a triple judged surely within is not an arc for the scalar test at either end") {
+  // Random triples (a, q, b), q off the chord ab by a fraction of the curved test's bound
+  // t |b - a| + noise: mostly near 1 (both sides of the bound), some far inside, and some with q
+  // far out along the line (where the rounding of cross products about q, and about each end,
+  // are far apart).  Wherever the shared judgement is sure, farther_than (the scalar test's first
+  // condition, with that end's own noise) must be false at both ends.
+  edgeplane_test::lcg_noise rng(11);
+  const detail::noise_sigma sigma{0.0015f, 0.0015f};
+  int sure = 0, sure_near = 0, beyond = 0;
+  for (int i = 0; i < 200000; ++i) {
+    const float t = std::pow(10.f, -3.f + 2.5f * static_cast<float>(rng.uniform01())), noise_k = 2.f * static_cast<float>(rng.uniform01());
+    const detail::point3 a{rng(3.f), rng(2.f), 0.3f + 8.f * static_cast<float>(rng.uniform01())};
+    detail::point3 dir{rng(1.f), rng(1.f), rng(1.f)};
+    dir = (1.f / detail::norm(dir)) * dir;
+    const float chord = std::pow(10.f, -3.f + 3.3f * static_cast<float>(rng.uniform01()));
+    const detail::point3 b = a + chord * dir;
+    if (!(b.z > 0.f)) continue;
+    const float na = noise_k * sigma(a.z), nb = noise_k * sigma(b.z);
+    detail::point3 perp{rng(1.f), rng(1.f), rng(1.f)};
+    perp = perp - detail::dot(perp, dir) * dir;
+    if (detail::norm(perp) < 1e-3f) continue;
+    perp = (1.f / detail::norm(perp)) * perp;
+    const int kind = static_cast<int>(rng.next_u32(10));
+    const float along = kind == 0 ? 1e4f * rng(1.f) : 0.5f + rng(0.3f);  // q's place along ab, in chords
+    const float ratio = kind == 1 ? 0.5f * static_cast<float>(rng.uniform01()) : 1.f + rng(0.03f);
+    const detail::point3 q = a + (along * chord) * dir + (ratio * (t * chord + (na < nb ? na : nb))) * perp;
+    if (!detail::arc_flat_rows_kernel<16>::surely_within(a, q, b, t, noise_k * sigma(std::min(a.z, b.z)))) continue;
+    ++sure;
+    sure_near += kind > 1 && ratio > 0.98f;
+    const bool at_a = detail::farther_than(q, a, b, t, na), at_b = detail::farther_than(q, b, a, t, nb);
+    beyond += at_a || at_b;
+    if (at_a || at_b) {
+      CAPTURE(i);
+      CAPTURE(ratio);
+      CAPTURE(along);
+      CHECK(!at_a);
+      CHECK(!at_b);
+    }
+  }
+  CHECK(beyond == 0);
+  CHECK(sure > 20000);      // it does judge: points well inside...
+  CHECK(sure_near > 1000);  // ...and near the bound
 }
 
 // The row kernel keeps a lane's extrema, corner and curved pre-tests open only where both of its

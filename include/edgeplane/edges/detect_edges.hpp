@@ -316,6 +316,100 @@ struct valid_runs_bands_kernel {
   }
 };
 
+/// The curved test's arc pre-test, shared between neighbours (host backends, an even arm of n =
+/// 2 m neighbours).  The scalar test's first condition on side s at pixel c is that the arm's
+/// midpoint c + s m lies farther than t_bend * chord + noise(z_c) from the chord between c and the
+/// arm's end c + s n.  That is one triple of points, (q - m, q, q + m) with q = c + s m: the right
+/// side's at c and the left side's at c + n.  So each triple is judged once, here, per pixel q and
+/// direction: bit d of flat[q] says its middle point surely lies within the bound (the triple
+/// cannot make an arc for either end), and the edge pass keeps a curved test open where either of
+/// its two triples' bits is clear.  This halves the pre-test's cross products (8 to 4 a pixel).
+///
+/// The judgement must imply the scalar expression's "no" at both ends, which compute from other
+/// operands (c's own differences, and noise(z_c) of their own end).  Here: u = a - q, v = b - q
+/// (a = q - m, b = q + m), num = |u x v|^2, l2 = |b - a|^2 (the very bits each end's l2 has:
+/// b - a is the scalar test's e - c at a and exactly its negation at b), S = |u|^2 + |v|^2, T = l2
+/// (t^2 l2 + noise^2) with noise the smaller of the two ends' noise(z) (so T is at most each end's).
+/// Sure: num < 0.99 T, and S^2 1e-6 <= T, and the guards of farther_than's shortcut (t, noise >= 0,
+/// l2 >= 1e-12, t^2 l2 + noise^2 >= 1e-20; num and T at most 1e29).  Why that suffices: each
+/// cross product of rounded differences differs from the exact one of the points by at most
+/// 4.01 eps (|x_j y_k| + |x_k y_j|) a component (eps = 2^-24: the differences, the products, the
+/// subtraction), at most 5.7 eps |x| |y| in all; |u| |v| <= S / 2 here, and at an end (ap = -u
+/// or -v, ab = +-(b - a)) |ap| |ab| <= |u| (|u| + |v|) <= 1.21 S, so the two computed crosses
+/// differ by at most 9.8 eps S, which the second condition keeps below 1.2e-3 sqrt(T); with num <
+/// 0.99 T the end's num is then below 0.9917 T (1 + 3 eps) < 0.9999 l2 floor2 of its own
+/// farther_than shortcut, which is sure that the scalar expression is false.  On surfaces S is
+/// about l2 / 2, and the second condition holds for any t above 4e-4.
+template <int Lanes>
+struct arc_flat_rows_kernel {
+  static constexpr bool even_work = true;  // see detail::even_work_v
+  const float* points;                     // the point planes, laid out as `at` says
+  edge_points_layout at;
+  int w, h, m;  // the image's size; the half arm (n / 2)
+  float t, noise_k;
+  noise_sigma sigma;
+  std::uint8_t* flat;  // dense w x h bytes
+
+  // (t >= 0 and noise >= 0 are the caller's: detect_edges runs this kernel only then; num < 0.99 T
+  // <= 0.99e29 holds num below 1e29)
+  EDGEPLANE_HD EDGEPLANE_INLINE static bool surely_within(point3 a, point3 q, point3 b, float t, float noise) {
+    const point3 u = a - q, v = b - q, ab = b - a;
+    const float l2 = dot(ab, ab);
+    const point3 cr = cross(u, v);
+    const float num = dot(cr, cr), s = dot(u, u) + dot(v, v);
+    const float floor2 = t * t * l2 + noise * noise, big = l2 * floor2;
+    return (l2 >= 1e-12f) & (floor2 >= 1e-20f) & (big <= 1e29f) & (num < big * 0.99f) & (s * s * 1e-6f <= big);
+  }
+  // (32-bit flags, as the edge pass's: byte lanes would set the vector width to 16 floats' quarter)
+  template <class Direction, int D, int N>
+  EDGEPLANE_HD EDGEPLANE_INLINE static void along(const float* z, const float* xs, const float* ys, std::ptrdiff_t pitch,
+                                                  int m, float t, float noise_k, noise_sigma sigma, unsigned* f) {
+    const std::ptrdiff_t o = m * (static_cast<std::ptrdiff_t>(Direction::dy) * pitch + Direction::dx);
+    for (int l = 0; l < N; ++l) {
+      const float za = z[l - o], zb = z[l + o];
+      // the smaller of the curved test's noise at the two ends: sigma's operations are monotonic
+      // in z > 0 (non-negative factors), so it is the noise at the nearer end, exactly
+      const float noise = noise_k * sigma(za < zb ? za : zb);
+      const bool in = surely_within(point3{xs[l - o], ys[l - o], za}, point3{xs[l], ys[l], z[l]},
+                                    point3{xs[l + o], ys[l + o], zb}, t, noise);
+      f[l] |= static_cast<unsigned>(in) << D;
+    }
+  }
+  // the N pixels from element i of the planes (inside a row); from locals, not members: the byte
+  // stores could alias them
+  template <int N>
+  EDGEPLANE_HD EDGEPLANE_INLINE static void run(const float* z, const float* xs, const float* ys, std::ptrdiff_t pitch,
+                                                int m, float t, float noise_k, noise_sigma sigma, std::uint8_t* out) {
+    unsigned f[N] = {};
+    along<direction::horizontal, 0, N>(z, xs, ys, pitch, m, t, noise_k, sigma, f);
+    along<direction::vertical, 1, N>(z, xs, ys, pitch, m, t, noise_k, sigma, f);
+    along<direction::left_diagonal, 2, N>(z, xs, ys, pitch, m, t, noise_k, sigma, f);
+    along<direction::right_diagonal, 3, N>(z, xs, ys, pitch, m, t, noise_k, sigma, f);
+    for (int l = 0; l < N; ++l) out[l] = static_cast<std::uint8_t>(f[l]);
+  }
+  EDGEPLANE_HOST_CLONES EDGEPLANE_HD void operator()(std::int64_t row) const {
+    const int y = static_cast<int>(row);
+    // Runs of Lanes pixels; the last one, where the row is not a multiple, overlaps the one before
+    // (the same bits again).  A pixel's points reach at most the padding rows (m <= the reach).
+    const std::int64_t i = at.offset(0, y);
+    const float* z = points + at.z + i;
+    const float* xs = points + at.x + i;
+    const float* ys = points + at.y + i;
+    std::uint8_t* out = flat + static_cast<std::int64_t>(y) * w;
+    const int wd = w, half = m;
+    const float tb = t, nk = noise_k;
+    const noise_sigma sg = sigma;
+    int x0 = 0;
+    for (; x0 + Lanes <= wd; x0 += Lanes) run<Lanes>(z + x0, xs + x0, ys + x0, wd, half, tb, nk, sg, out + x0);
+    if (x0 < wd) {
+      if (wd >= Lanes)
+        run<Lanes>(z + (wd - Lanes), xs + (wd - Lanes), ys + (wd - Lanes), wd, half, tb, nk, sg, out + (wd - Lanes));
+      else
+        for (; x0 < wd; ++x0) run<1>(z + x0, xs + x0, ys + x0, wd, half, tb, nk, sg, out + x0);
+    }
+  }
+};
+
 /// All enabled edge types along all four directions, one pass; invalid pixels get edge_invalid.
 /// A pixel's neighbour counts come from `runs` (valid_runs_*_kernel) when it is given; otherwise
 /// from the interior flag the interior pass left in `edges` (a pixel whose whole window of
@@ -331,6 +425,9 @@ struct all_edges_kernel {
   // the point planes (the host's row runs need them, with runs), laid out as points_at says
   const float* points = nullptr;
   edge_points_layout points_at{};
+  // the curved pre-test's shared judgements (arc_flat_rows_kernel; dense w x h, readable m rows and
+  // a run beyond either end), or null: the row runs judge each side in place
+  const std::uint8_t* arc_flat = nullptr;
 
   template <class Direction, int D>
   EDGEPLANE_HD EDGEPLANE_INLINE std::uint8_t along(int x, int y, bool interior, unsigned tests) const {
@@ -464,7 +561,7 @@ struct all_edges_rows_kernel {
         maybe[l] |= static_cast<unsigned>(bend) << (4 * D + 2);
       }
     }
-    if (s.use_curved) {
+    if (s.use_curved && px.arc_flat == nullptr) {  // (else from the shared judgements: maybe_all)
       const int n = s.curved.n, mid = n / 2 > 0 ? n / 2 : 1;
       const float t = s.curved.t_bend;
       for (int l = 0; l < Lanes; ++l) {
@@ -710,6 +807,32 @@ struct all_edges_rows_kernel {
     maybe_along<direction::vertical, 1, Checked>(c, pitch, x0, zc, noise_co, noise_cu, maybe);
     maybe_along<direction::left_diagonal, 2, Checked>(c, pitch, x0, zc, noise_co, noise_cu, maybe);
     maybe_along<direction::right_diagonal, 3, Checked>(c, pitch, x0, zc, noise_co, noise_cu, maybe);
+    if (px.set.use_curved && px.arc_flat != nullptr) {
+      // The curved test stays open along d unless both of its triples, centred m = n / 2 steps
+      // either side, were judged surely within (bit d of both bytes; arc_flat_rows_kernel): the
+      // two bytes of 8 lanes at a time, one bit per lane gathered as swar::bytes_at_least does.
+      const std::uint8_t* f = px.arc_flat + (c.z - (px.points + px.points_at.offset(0, 0)));  // lane 0's byte
+      const int m = px.set.curved.n / 2;
+      const std::ptrdiff_t steps[4] = {direction::horizontal::dy * pitch + direction::horizontal::dx,
+                                       direction::vertical::dy * pitch + direction::vertical::dx,
+                                       direction::left_diagonal::dy * pitch + direction::left_diagonal::dx,
+                                       direction::right_diagonal::dy * pitch + direction::right_diagonal::dx};
+      unsigned open[4];
+      for (int d = 0; d < 4; ++d) {
+        const std::ptrdiff_t o = m * steps[d];
+        open[d] = 0;
+        for (int l = 0; l < Lanes; l += 8) {
+          std::uint64_t g = (~(swar::load(f + l - o) & swar::load(f + l + o)) >> d) & swar::ones8;
+          g |= g >> 7;
+          g |= g >> 14;
+          g |= g >> 28;
+          open[d] |= static_cast<unsigned>(g & 0xffu) << l;
+        }
+      }
+      for (int l = 0; l < Lanes; ++l)
+        maybe[l] |= ((open[0] >> l) & 1u) << 3 | ((open[1] >> l) & 1u) << 7 | ((open[2] >> l) & 1u) << 11 |
+                    ((open[3] >> l) & 1u) << 15;
+    }
   }
 
   EDGEPLANE_HOST_CLONES EDGEPLANE_HD void operator()(std::int64_t item) const {
@@ -881,7 +1004,8 @@ void detect_edge(const Backend& b, image_view<const float> depth, const intrinsi
 namespace detail {
 /// The layout of detect_edges' host scratch for a w x h image (w, h > 0) and the edge tests'
 /// reach r, as byte offsets: the valid-neighbour counts (8 w x h bytes), the validity plane (w x h
-/// bytes), then, 64-byte aligned, the point planes (edge_points_layout).
+/// bytes; once the counts are made, the curved pre-test's judgements, arc_flat_rows_kernel), then,
+/// 64-byte aligned, the point planes (edge_points_layout).
 struct edge_scratch_layout {
   std::size_t valid, points, bytes;
   edge_scratch_layout(int w, int h, int r) {
@@ -936,6 +1060,20 @@ void detect_edges(const Backend& b, image_view<const float> depth, const intrins
     px.runs = runs;
     px.points = points;
     px.points_at = points_at;
+    // The curved pre-test's shared triples, where the arm's midpoint halves it, into the validity
+    // plane (read by the counts only).  The edge pass reads the judgements of every lane m steps
+    // either way, past the plane's ends for lanes its counts then reject: in the count planes
+    // before it and the point planes after it, so the counts must span m rows and a run.
+    const int m = set.curved.n / 2;
+    const edge_type::curved& cu = set.curved;
+    if (set.use_curved && cu.n % 2 == 0 && cu.t_bend >= 0.f && cu.noise_k >= 0.f && cu.sigma.s0 >= 0.f &&
+        cu.sigma.s2 >= 0.f &&
+        8 * static_cast<std::int64_t>(w) * h >= static_cast<std::int64_t>(m) * (w + 1) + 2 * detail::row_lanes<Backend>) {
+      std::uint8_t* flat = valid;
+      b.for_each_index(h, detail::arc_flat_rows_kernel<detail::row_lanes<Backend>>{
+                              points, points_at, w, h, m, cu.t_bend, cu.noise_k, cu.sigma, flat});
+      px.arc_flat = flat;
+    }
   } else {
     detail::for_each_pixel(b, w, h, detail::interior_pixel_kernel{depth, edges, reach});
   }
