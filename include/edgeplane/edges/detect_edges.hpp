@@ -2,6 +2,7 @@
 #pragma once
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 
 #include "edgeplane/backend/buffer.hpp"
 #include "edgeplane/camera.hpp"
@@ -875,27 +876,34 @@ struct all_edges_rows_kernel {
     } else {
       maybe_all<true>(c, pitch, x0, zc, noise_co, noise_cu, maybe);
       // The extrema, corner and curved pre-tests ran on every lane; each stays open only where
-      // both of its counts reach its neighbours (the scalar test's first check).  The counts are
-      // compared 8 bytes at a time into one bit per lane (swar::bytes_at_least; counts <= 32),
-      // then spread to the lanes' words.
-      static_assert(Lanes <= 32, "one bit per lane in an unsigned");
-      const int need[3] = {px.set.extrema.n, px.set.corner.n, px.set.curved.n};
-      unsigned keep_bits[12];  // test 1 + j along direction d at 3 d + j
-      for (int d = 0; d < 4; ++d)
-        for (int j = 0; j < 3; ++j) {
-          unsigned m = 0;
-          for (int l = 0; l < Lanes; l += 8)
-            m |= (swar::bytes_at_least(swar::load(cnt + 2 * d * n + l), need[j]) &
-                  swar::bytes_at_least(swar::load(cnt + (2 * d + 1) * n + l), need[j]))
-                 << l;
-          keep_bits[3 * d + j] = m;
-        }
-      for (int l = 0; l < Lanes; ++l) {
-        unsigned keep = 0x1111u;  // the jump bits
-        for (int d = 0; d < 4; ++d)
-          for (int j = 0; j < 3; ++j) keep |= ((keep_bits[3 * d + j] >> l) & 1u) << (4 * d + 1 + j);
-        maybe[l] &= keep;
+      // both of its counts reach its neighbours (the scalar test's first check).  The counts
+      // (<= 32) are compared 8 bytes at a time: a byte or-ed with 0x80 less the threshold (clamped
+      // to 0..128) cannot borrow from its neighbour and keeps its top bit exactly where the count
+      // is at least the threshold.  The three tests' flags of direction d become bits 1..3 of
+      // each lane's byte, shifted by 4 for the odd directions, so that two bytes per lane hold
+      // its four directions' bits in maybe's order (bit 4 d + j).
+      static_assert(Lanes % 8 == 0, "whole 8-byte words of counts");
+      constexpr std::uint64_t high = 0x8080808080808080ull;
+      std::uint64_t need[3];
+      {
+        const int t[3] = {px.set.extrema.n, px.set.corner.n, px.set.curved.n};
+        for (int j = 0; j < 3; ++j)
+          need[j] = swar::ones8 * static_cast<std::uint64_t>(t[j] < 0 ? 0 : t[j] > 128 ? 128 : t[j]);
       }
+      std::uint8_t keep[2][Lanes];  // directions 0 and 1 / 2 and 3 of lane l
+      for (int l = 0; l < Lanes; l += 8) {
+        std::uint64_t k[2] = {0, 0};
+        for (int d = 0; d < 4; ++d) {
+          const std::uint64_t a = swar::load(cnt + 2 * d * n + l) | high, b = swar::load(cnt + (2 * d + 1) * n + l) | high;
+          std::uint64_t f = 0;
+          for (int j = 0; j < 3; ++j) f |= (((a - need[j]) & (b - need[j]) & high) >> (6 - j));
+          k[d / 2] |= f << (4 * (d % 2));
+        }
+        std::memcpy(&keep[0][l], &k[0], 8);
+        std::memcpy(&keep[1][l], &k[1], 8);
+      }
+      for (int l = 0; l < Lanes; ++l)
+        maybe[l] &= 0x1111u | static_cast<unsigned>(keep[0][l]) | static_cast<unsigned>(keep[1][l]) << 8;
     }
     std::uint8_t* e = &px.edges(x0, y);
     unsigned any = 0;
