@@ -321,26 +321,29 @@ struct valid_runs_bands_kernel {
 /// 2 m neighbours).  The scalar test's first condition on side s at pixel c is that the arm's
 /// midpoint c + s m lies farther than t_bend * chord + noise(z_c) from the chord between c and the
 /// arm's end c + s n.  That is one triple of points, (q - m, q, q + m) with q = c + s m: the right
-/// side's at c and the left side's at c + n.  So each triple is judged once, here, per pixel q and
-/// direction: bit d of flat[q] says its middle point surely lies within the bound (the triple
-/// cannot make an arc for either end), and the edge pass keeps a curved test open where either of
-/// its two triples' bits is clear.  This halves the pre-test's cross products (8 to 4 a pixel).
+/// side's at c and the left side's at c + n.  So each triple's geometry is computed once, here,
+/// per pixel q and direction d, and judged for each end with that end's noise: bit d of flat[q]
+/// says its middle point surely lies within the bound of the end q - m (so the right side of
+/// q - m cannot be an arc), bit 4 + d the same for the end q + m (its left side).  The edge pass
+/// keeps a curved test open where either of its two sides' bits is clear.  This halves the
+/// pre-test's cross products (8 to 4 a pixel).
 ///
-/// The judgement must imply the scalar expression's "no" at both ends, which compute from other
-/// operands (c's own differences, and noise(z_c) of their own end).  Here: u = a - q, v = b - q
-/// (a = q - m, b = q + m), num = |u x v|^2, l2 = |b - a|^2 (the very bits each end's l2 has:
-/// b - a is the scalar test's e - c at a and exactly its negation at b), S = |u|^2 + |v|^2, T = l2
-/// (t^2 l2 + noise^2) with noise the smaller of the two ends' noise(z) (so T is at most each end's).
-/// Sure: num < 0.99 T, and S^2 1e-6 <= T, and the guards of farther_than's shortcut (t, noise >= 0,
-/// l2 >= 1e-12, t^2 l2 + noise^2 >= 1e-20; num and T at most 1e29).  Why that suffices: each
-/// cross product of rounded differences differs from the exact one of the points by at most
-/// 4.01 eps (|x_j y_k| + |x_k y_j|) a component (eps = 2^-24: the differences, the products, the
-/// subtraction), at most 5.7 eps |x| |y| in all; |u| |v| <= S / 2 here, and at an end (ap = -u
-/// or -v, ab = +-(b - a)) |ap| |ab| <= |u| (|u| + |v|) <= 1.21 S, so the two computed crosses
-/// differ by at most 9.8 eps S, which the second condition keeps below 1.2e-3 sqrt(T); with num <
-/// 0.99 T the end's num is then below 0.9917 T (1 + 3 eps) < 0.9999 l2 floor2 of its own
-/// farther_than shortcut, which is sure that the scalar expression is false.  On surfaces S is
-/// about l2 / 2, and the second condition holds for any t above 4e-4.
+/// A judgement must imply the scalar expression's "no" at its end, which computes from other
+/// operands (c's own differences).  Here: u = a - q, v = b - q (a = q - m, b = q + m), num =
+/// |u x v|^2, l2 = |b - a|^2 (the very bits each end's l2 has: b - a is the scalar test's e - c
+/// at a and exactly its negation at b), S = |u|^2 + |v|^2, T = l2 (t^2 l2 + noise^2) with the
+/// end's noise.  Sure: num < 0.99 T, and S^2 1e-6 <= T, and the guards of farther_than's shortcut
+/// (t, noise >= 0, l2 >= 1e-12, t^2 l2 + noise^2 >= 1e-20; T at most 1e29, so num < 1e29).  Why
+/// that suffices: each cross product of rounded differences differs from the exact one of the
+/// points by at most 4.01 eps (|x_j y_k| + |x_k y_j|) a component (eps = 2^-24: the differences,
+/// the products, the subtraction), at most 5.7 eps |x| |y| in all; |u| |v| <= S / 2 here, and at an
+/// end (ap = -u or -v, ab = +-(b - a)) |ap| |ab| <= |u| (|u| + |v|) <= 1.21 S, so the two computed
+/// crosses differ by at most 9.8 eps S, which the second condition keeps below 1.2e-3 sqrt(T);
+/// with num < 0.99 T the end's num is then below 0.9917 T (1 + 3 eps) < 0.9999 l2 floor2 of its
+/// own farther_than shortcut, which is sure that the scalar expression is false.  On surfaces S
+/// is about l2 / 2, and the second condition holds for any t above 4e-4.  (One judgement with the
+/// smaller of the two ends' noise, a bit per direction, left 7 % more curved tests open on a TUM
+/// frame, whose finishing cost more than the pass saved.)
 template <int Lanes>
 struct arc_flat_rows_kernel {
   static constexpr bool even_work = true;  // see detail::even_work_v
@@ -351,15 +354,20 @@ struct arc_flat_rows_kernel {
   noise_sigma sigma;
   std::uint8_t* flat;  // dense w x h bytes
 
-  // (t >= 0 and noise >= 0 are the caller's: detect_edges runs this kernel only then; num < 0.99 T
-  // <= 0.99e29 holds num below 1e29)
-  EDGEPLANE_HD EDGEPLANE_INLINE static bool surely_within(point3 a, point3 q, point3 b, float t, float noise) {
+  // The triple's judgements for its two ends, noise na at a and nb at b: bit 0 for a, bit 1 for b
+  // (t >= 0 and the noises >= 0 are the caller's: detect_edges runs this kernel only then).
+  EDGEPLANE_HD EDGEPLANE_INLINE static unsigned surely_within(point3 a, point3 q, point3 b, float t, float na,
+                                                             float nb) {
     const point3 u = a - q, v = b - q, ab = b - a;
     const float l2 = dot(ab, ab);
     const point3 cr = cross(u, v);
     const float num = dot(cr, cr), s = dot(u, u) + dot(v, v);
-    const float floor2 = t * t * l2 + noise * noise, big = l2 * floor2;
-    return (l2 >= 1e-12f) & (floor2 >= 1e-20f) & (big <= 1e29f) & (num < big * 0.99f) & (s * s * 1e-6f <= big);
+    const float tl = t * t * l2, fa = tl + na * na, fb = tl + nb * nb, ta = l2 * fa, tb = l2 * fb;
+    const float s2 = s * s * 1e-6f;
+    const bool ok = l2 >= 1e-12f;
+    const bool in_a = ok & (fa >= 1e-20f) & (ta <= 1e29f) & (num < ta * 0.99f) & (s2 <= ta);
+    const bool in_b = ok & (fb >= 1e-20f) & (tb <= 1e29f) & (num < tb * 0.99f) & (s2 <= tb);
+    return static_cast<unsigned>(in_a) | static_cast<unsigned>(in_b) << 1;
   }
   // (32-bit flags, as the edge pass's: byte lanes would set the vector width to 16 floats' quarter)
   template <class Direction, int D, int N>
@@ -368,12 +376,10 @@ struct arc_flat_rows_kernel {
     const std::ptrdiff_t o = m * (static_cast<std::ptrdiff_t>(Direction::dy) * pitch + Direction::dx);
     for (int l = 0; l < N; ++l) {
       const float za = z[l - o], zb = z[l + o];
-      // the smaller of the curved test's noise at the two ends: sigma's operations are monotonic
-      // in z > 0 (non-negative factors), so it is the noise at the nearer end, exactly
-      const float noise = noise_k * sigma(za < zb ? za : zb);
-      const bool in = surely_within(point3{xs[l - o], ys[l - o], za}, point3{xs[l], ys[l], z[l]},
-                                    point3{xs[l + o], ys[l + o], zb}, t, noise);
-      f[l] |= static_cast<unsigned>(in) << D;
+      // the curved test's noise at each end (its own expression there)
+      const unsigned in = surely_within(point3{xs[l - o], ys[l - o], za}, point3{xs[l], ys[l], z[l]},
+                                        point3{xs[l + o], ys[l + o], zb}, t, noise_k * sigma(za), noise_k * sigma(zb));
+      f[l] |= (in & 1u) << D | (in >> 1) << (4 + D);
     }
   }
   // the N pixels from element i of the planes (inside a row); from locals, not members: the byte
@@ -810,8 +816,9 @@ struct all_edges_rows_kernel {
     maybe_along<direction::right_diagonal, 3, Checked>(c, pitch, x0, zc, noise_co, noise_cu, maybe);
     if (px.set.use_curved && px.arc_flat != nullptr) {
       // The curved test stays open along d unless both of its triples, centred m = n / 2 steps
-      // either side, were judged surely within (bit d of both bytes; arc_flat_rows_kernel): the
-      // two bytes of 8 lanes at a time, one bit per lane gathered as swar::bytes_at_least does.
+      // either side, were judged surely within for this end (arc_flat_rows_kernel: bit d of the
+      // byte m steps right, bit 4 + d of the byte m steps left): the two bytes of 8 lanes at a
+      // time, one bit per lane gathered as swar::bytes_at_least does.
       const std::uint8_t* f = px.arc_flat + (c.z - (px.points + px.points_at.offset(0, 0)));  // lane 0's byte
       const int m = px.set.curved.n / 2;
       const std::ptrdiff_t steps[4] = {direction::horizontal::dy * pitch + direction::horizontal::dx,
@@ -823,7 +830,7 @@ struct all_edges_rows_kernel {
         const std::ptrdiff_t o = m * steps[d];
         open[d] = 0;
         for (int l = 0; l < Lanes; l += 8) {
-          std::uint64_t g = (~(swar::load(f + l - o) & swar::load(f + l + o)) >> d) & swar::ones8;
+          std::uint64_t g = (~((swar::load(f + l - o) >> 4) & swar::load(f + l + o)) >> d) & swar::ones8;
           g |= g >> 7;
           g |= g >> 14;
           g |= g >> 28;
