@@ -327,17 +327,22 @@ class segmenter {
         right_bits_.resize(static_cast<std::size_t>(detail::join_blocks(adj.grid_width())) * adj.grid_height());
         right_bits = right_bits_.data();
       }
-      detail::unite_components(b_, n, active, work_items, adj, parent_.data(), right_bits);
-    } else
+      // the row pass zeroes the counts of the elements that can be roots, if it runs by rows
+      const bool zeroed = detail::unite_components(b_, n, active, work_items, adj, parent_.data(), right_bits,
+                                                   count_.data());
+      return flag_components(n, min_size, zeroed);
+    } else {
       connected_components(b_, n, active, work_items, adj, parent_.data());
-    return flag_components(n, min_size);
+      return flag_components(n, min_size);
+    }
   }
 
   // Flags (flags_) the roots of union-find components of at least min_size elements and numbers
   // them 1, 2, ... in raster order of their roots (scan_); returns how many.  Host backends: the
   // union-find need not be flat yet (the counting pass flattens it).
-  std::int32_t flag_components(std::int64_t n, std::int32_t min_size) {
-    b_.memset(count_.data(), 0, sizeof(std::int32_t) * n);
+  // (counts_zeroed: count_ is 0 at every root already; only roots' counts are written and read)
+  std::int32_t flag_components(std::int64_t n, std::int32_t min_size, bool counts_zeroed = false) {
+    if (!counts_zeroed) b_.memset(count_.data(), 0, sizeof(std::int32_t) * n);
     if constexpr (Backend::host_accessible) {
       // The blocks count their roots' elements and list their roots (in flags_); then the roots
       // are numbered in order here, writing flags_ and scan_ at the roots only (the only entries

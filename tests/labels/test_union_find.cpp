@@ -473,6 +473,7 @@ TEST_CASE_TEMPLATE("grid4_adjacency: components equal a serial union-find on ran
   // pixel mostly keeps its left neighbour's level: whole 16-pixel blocks then join into one run,
   // and runs cross blocks, which the host passes take in one step.
   lcg_noise rng(17);
+  [[maybe_unused]] int all_roots = 0;  // (the host's row pass's zeroed counts: not vacuous)
   for (const auto& [w, h] : {std::pair{1, 1}, std::pair{1, 9}, std::pair{13, 1}, std::pair{37, 23}, std::pair{64, 40},
                              std::pair{100, 30}, std::pair{161, 12}}) {
     for (const double holes : {0.0, 0.02, 0.2, 0.6})
@@ -535,10 +536,28 @@ TEST_CASE_TEMPLATE("grid4_adjacency: components equal a serial union-find on ran
           std::vector<std::uint16_t> right(static_cast<std::size_t>(blocks) * h, 0xa5a5);
           device_array<std::int32_t, B> parent_k(b, n, -7);
           const detail::grid4_adjacency<detail::covered_active> adj{z.cview(w, h), active, 0.06f, 0.f, 0.f};
-          detail::unite_components(b, static_cast<std::int64_t>(n), active, static_cast<std::int64_t>(n), adj,
-                                   parent_k.data(), right.data());
+          // ... and zeroes, in counts full of garbage, the entries of the elements that can be
+          // roots (the runs' first elements), so that the root counts need no clearing pass: every
+          // root's entry must be 0, and the other entries untouched where no run starts
+          std::vector<std::int32_t> counts(n, 0x5a5a5a5a);
+          const bool zeroed = detail::unite_components(b, static_cast<std::int64_t>(n), active,
+                                                       static_cast<std::int64_t>(n), adj, parent_k.data(),
+                                                       right.data(), counts.data());
+          CHECK(zeroed);
           b.for_each_index(static_cast<std::int64_t>(n), detail::uf_flatten_kernel{parent_k.data()});
           CHECK(parent_k.host() == want);
+          int roots = 0, unzeroed_roots = 0, zeroed_inside_runs = 0;
+          for (std::size_t i = 0; i < n; ++i) {
+            const bool root = want[i] == static_cast<std::int32_t>(i);
+            roots += root;
+            unzeroed_roots += root && counts[i] != 0;
+            // an active element whose left neighbour in its row joins it is no run's first element
+            const int x = static_cast<int>(i % static_cast<std::size_t>(w)), y = static_cast<int>(i / static_cast<std::size_t>(w));
+            zeroed_inside_runs += x > 0 && cov[i] && cov[i - 1] && adj.joins_right(x - 1, y) && counts[i] != 0x5a5a5a5a;
+          }
+          all_roots += roots;
+          CHECK(unzeroed_roots == 0);
+          CHECK(zeroed_inside_runs == 0);
           int wrong = 0;
           for (int y = 0; y < h; ++y)
             for (int k = 0; k < blocks; ++k)
@@ -548,6 +567,7 @@ TEST_CASE_TEMPLATE("grid4_adjacency: components equal a serial union-find on ran
       }
     }
   }
+  if constexpr (B::host_accessible) CHECK(all_roots > 1000);
 }
 
 TEST_CASE_TEMPLATE("erode_failed: on the failed candidates' rectangle it marks what the whole image's erosion marks",

@@ -130,9 +130,14 @@ struct uf_init_runs_kernel {
   /// x, right_lanes<16>(x, y), kept at right_bits[y * join_blocks(w) + x / 16] for every block
   /// the lanes loop covers (x + 16 < w), for the vertical unions to read.
   std::uint16_t* right_bits = nullptr;
+  /// When not null: set to 0 at every run's first element, the only elements that can become
+  /// roots (a component's root is its smallest element, which starts its row's run), so that
+  /// root counts need no clearing pass over all elements.
+  std::int32_t* zero_heads = nullptr;
   EDGEPLANE_HOST_CLONES EDGEPLANE_HD void operator()(std::int64_t row) const {
     const int y = static_cast<int>(row), w = adj.grid_width();
     const std::int64_t o = static_cast<std::int64_t>(y) * w;
+    std::int32_t* const zero = zero_heads;
     std::int32_t start = -1;
     bool joined = false;  // the previous pixel joins this one
     int x = 0;
@@ -151,7 +156,10 @@ struct uf_init_runs_kernel {
             joined = false;
             continue;
           }
-          if (!joined) start = static_cast<std::int32_t>(i);
+          if (!joined) {
+            start = static_cast<std::int32_t>(i);
+            if (zero) zero[i] = 0;
+          }
           parent[i] = start;
           joined = (right >> l) & 1u;
         }
@@ -164,7 +172,10 @@ struct uf_init_runs_kernel {
         joined = false;
         continue;
       }
-      if (!joined) start = static_cast<std::int32_t>(i);
+      if (!joined) {
+        start = static_cast<std::int32_t>(i);
+        if (zero) zero[i] = 0;
+      }
       parent[i] = start;
       joined = adj.joins_right(x, y);
     }
@@ -466,18 +477,21 @@ namespace detail {
 /// that flatten within their next pass.
 /// `right_bits` (optional, host backends): scratch of join_blocks(width) * height entries, in which
 /// the row pass keeps each block's right joins for the vertical unions (which otherwise compute
-/// them again, twice); used only by adjacencies with has_join_lanes.
+/// them again, twice); used only by adjacencies with has_join_lanes.  `zero_roots` (optional, n
+/// elements): returns true where it was set to 0 at every element that can be a root (the host
+/// row pass's run starts), false where it was left untouched.
 template <class Backend, class Active, class Adjacency>
-void unite_components(const Backend& b, std::int64_t n, Active active, std::int64_t work_items, Adjacency adj,
-                      std::int32_t* parent, std::uint16_t* right_bits = nullptr) {
+bool unite_components(const Backend& b, std::int64_t n, Active active, std::int64_t work_items, Adjacency adj,
+                      std::int32_t* parent, std::uint16_t* right_bits = nullptr, std::int32_t* zero_roots = nullptr) {
   require(n >= 0 && n < (std::int64_t(1) << 31), "union-find supports up to 2^31 - 1 elements");
   if constexpr (Backend::host_accessible && has_grid_joins<Adjacency>) {
     require(work_items == n && static_cast<std::int64_t>(adj.grid_width()) * adj.grid_height() == n,
             "connected_components: a grid adjacency needs one work item per pixel of its image");
     if constexpr (!has_join_lanes<Adjacency>) right_bits = nullptr;
-    b.for_each_index(adj.grid_height(), uf_init_runs_kernel<Active, Adjacency>{active, adj, parent, right_bits});
+    b.for_each_index(adj.grid_height(),
+                     uf_init_runs_kernel<Active, Adjacency>{active, adj, parent, right_bits, zero_roots});
     b.for_each_index(adj.grid_height(), uf_union_down_kernel<Adjacency>{adj, parent, right_bits});
-    return;
+    return zero_roots != nullptr;
   }
   b.for_each_index(n, uf_init_kernel<Active>{active, parent});
   if constexpr (is_grid_adjacency<Adjacency>) {
@@ -487,6 +501,7 @@ void unite_components(const Backend& b, std::int64_t n, Active active, std::int6
   } else {
     b.for_each_index(work_items, uf_union_kernel<Adjacency>{adj, parent});
   }
+  return false;
 }
 }  // namespace detail
 
