@@ -28,9 +28,9 @@ struct cpu {
   /// edgeplane's atomic helpers for shared writes.  Synchronous.
   ///
   /// A kernel whose items cost alike (detail::even_work_v) runs as chunks_per_thread contiguous
-  /// chunks per hardware thread: TBB's default partitioning splits the range item by item on demand, which
-  /// cost about 4 us per call on the 2-core VM against about 1 us for a few chunks, and gives
-  /// neighbouring items (rows, blocks of diagonals) to different threads.
+  /// chunks per hardware thread: TBB's default partitioning splits the range item by item on
+  /// demand, which cost about 4 us per call on the 2-core VM against about 1 us for a few chunks,
+  /// and gives neighbouring items (rows, blocks of diagonals) to different threads.
   template <class F>
   void for_each_index(std::int64_t n, F f) const {
     if (n <= 0) return;

@@ -349,7 +349,7 @@ struct arc_flat_rows_kernel {
   static constexpr bool even_work = true;  // see detail::even_work_v
   const float* points;                     // the point planes, laid out as `at` says
   edge_points_layout at;
-  int w, h, m;  // the image's size; the half arm (n / 2)
+  int w, m;  // the image's width; the half arm (n / 2)
   float t, noise_k;
   noise_sigma sigma;
   std::uint8_t* flat;  // dense w x h bytes
@@ -818,7 +818,7 @@ struct all_edges_rows_kernel {
       // The curved test stays open along d unless both of its triples, centred m = n / 2 steps
       // either side, were judged surely within for this end (arc_flat_rows_kernel: bit d of the
       // byte m steps right, bit 4 + d of the byte m steps left): the two bytes of 8 lanes at a
-      // time, one bit per lane gathered as swar::bytes_at_least does.
+      // time, bit d of each byte moved to its top and gathered to one bit per lane.
       const std::uint8_t* f = px.arc_flat + (c.z - (px.points + px.points_at.offset(0, 0)));  // lane 0's byte
       const int m = px.set.curved.n / 2;
       const std::ptrdiff_t steps[4] = {direction::horizontal::dy * pitch + direction::horizontal::dx,
@@ -829,13 +829,8 @@ struct all_edges_rows_kernel {
       for (int d = 0; d < 4; ++d) {
         const std::ptrdiff_t o = m * steps[d];
         open[d] = 0;
-        for (int l = 0; l < Lanes; l += 8) {
-          std::uint64_t g = (~((swar::load(f + l - o) >> 4) & swar::load(f + l + o)) >> d) & swar::ones8;
-          g |= g >> 7;
-          g |= g >> 14;
-          g |= g >> 28;
-          open[d] |= static_cast<unsigned>(g & 0xffu) << l;
-        }
+        for (int l = 0; l < Lanes; l += 8)
+          open[d] |= swar::gather_high_bits(~((swar::load(f + l - o) >> 4) & swar::load(f + l + o)) >> d << 7) << l;
       }
       for (int l = 0; l < Lanes; ++l)
         maybe[l] |= ((open[0] >> l) & 1u) << 3 | ((open[1] >> l) & 1u) << 7 | ((open[2] >> l) & 1u) << 11 |
@@ -884,26 +879,20 @@ struct all_edges_rows_kernel {
       maybe_all<true>(c, pitch, x0, zc, noise_co, noise_cu, maybe);
       // The extrema, corner and curved pre-tests ran on every lane; each stays open only where
       // both of its counts reach its neighbours (the scalar test's first check).  The counts
-      // (<= 32) are compared 8 bytes at a time: a byte or-ed with 0x80 less the threshold (clamped
-      // to 0..128) cannot borrow from its neighbour and keeps its top bit exactly where the count
-      // is at least the threshold.  The three tests' flags of direction d become bits 1..3 of
-      // each lane's byte, shifted by 4 for the odd directions, so that two bytes per lane hold
-      // its four directions' bits in maybe's order (bit 4 d + j).
+      // (<= 32) are compared 8 bytes at a time (swar::at_least, both sides, each test's
+      // threshold, made once).  The three tests' flags of direction d become bits 1..3 of each lane's byte,
+      // shifted by 4 for the odd directions, so that two bytes per lane hold its four directions'
+      // bits in maybe's order (bit 4 d + j).
       static_assert(Lanes % 8 == 0, "whole 8-byte words of counts");
-      constexpr std::uint64_t high = 0x8080808080808080ull;
-      std::uint64_t need[3];
-      {
-        const int t[3] = {px.set.extrema.n, px.set.corner.n, px.set.curved.n};
-        for (int j = 0; j < 3; ++j)
-          need[j] = swar::ones8 * static_cast<std::uint64_t>(t[j] < 0 ? 0 : t[j] > 128 ? 128 : t[j]);
-      }
+      const swar::at_least need[3] = {swar::at_least(px.set.extrema.n), swar::at_least(px.set.corner.n),
+                                      swar::at_least(px.set.curved.n)};
       std::uint8_t keep[2][Lanes];  // directions 0 and 1 / 2 and 3 of lane l
       for (int l = 0; l < Lanes; l += 8) {
         std::uint64_t k[2] = {0, 0};
         for (int d = 0; d < 4; ++d) {
-          const std::uint64_t a = swar::load(cnt + 2 * d * n + l) | high, b = swar::load(cnt + (2 * d + 1) * n + l) | high;
+          const std::uint64_t a = swar::load(cnt + 2 * d * n + l), b = swar::load(cnt + (2 * d + 1) * n + l);
           std::uint64_t f = 0;
-          for (int j = 0; j < 3; ++j) f |= (((a - need[j]) & (b - need[j]) & high) >> (6 - j));
+          for (int j = 0; j < 3; ++j) f |= (need[j](a) & need[j](b)) >> (6 - j);
           k[d / 2] |= f << (4 * (d % 2));
         }
         std::memcpy(&keep[0][l], &k[0], 8);
@@ -1079,15 +1068,14 @@ void detect_edges(const Backend& b, image_view<const float> depth, const intrins
     // plane (read by the counts only).  The edge pass reads the judgements of every lane m steps
     // either way, past the plane's ends for lanes its counts then reject: in the count planes
     // before it and the point planes after it, so the counts must span m rows and a run.
-    const int m = set.curved.n / 2;
     const edge_type::curved& cu = set.curved;
+    const int m = cu.n / 2;
     if (set.use_curved && cu.n % 2 == 0 && cu.t_bend >= 0.f && cu.noise_k >= 0.f && cu.sigma.s0 >= 0.f &&
         cu.sigma.s2 >= 0.f &&
         8 * static_cast<std::int64_t>(w) * h >= static_cast<std::int64_t>(m) * (w + 1) + 2 * detail::row_lanes<Backend>) {
-      std::uint8_t* flat = valid;
       b.for_each_index(h, detail::arc_flat_rows_kernel<detail::row_lanes<Backend>>{
-                              points, points_at, w, h, m, cu.t_bend, cu.noise_k, cu.sigma, flat});
-      px.arc_flat = flat;
+                              points, points_at, w, m, cu.t_bend, cu.noise_k, cu.sigma, valid});
+      px.arc_flat = valid;
     }
   } else {
     detail::for_each_pixel(b, w, h, detail::interior_pixel_kernel{depth, edges, reach});
