@@ -155,8 +155,10 @@ struct write_candidates_kernel {
 };
 /// A split round's ids over a rectangle of the candidate image (`cand`, a view of it), whose
 /// pixel (x, y) is element y * cand.width + x of the union-find: pixels of kept components get
-/// offset + the 1-based index of their root among the kept roots, pixels of dropped components 0;
-/// pixels that took no part keep their value.
+/// offset + the 1-based index of their root among the kept roots; all others keep their value, so
+/// a split candidate's pixels that no piece took (its rim and its dropped components) keep its
+/// id.  A retired id counts as none everywhere after: its status keeps it out of the merge table,
+/// the failed flags and the refits, as 0 is.
 struct write_members_kernel {
   const std::int32_t* parent;
   const std::int32_t* flags;
@@ -165,7 +167,29 @@ struct write_members_kernel {
   image_view<std::int32_t> cand;
   EDGEPLANE_HD void operator()(int x, int y) const {
     const std::int32_t r = parent[static_cast<std::int64_t>(y) * cand.width + x];
-    if (r >= 0) cand(x, y) = flags[r] ? offset + scan[r] : 0;
+    if (r >= 0 && flags[r]) cand(x, y) = offset + scan[r];
+  }
+};
+/// Labels from a candidate-id image through a table (host backends' sums of a split round's
+/// pieces): pixel (x, y) gets table[cand(x, y)] (ids 0 .. the table's last).
+struct candidate_table_labels {
+  image_view<const std::int32_t> cand;
+  const std::int32_t* table;
+  std::int32_t operator()(int x, int y) const { return table[cand(x, y)]; }
+  /// out[l] = (*this)(x + l, y) for l < L (host lanes of moments_kernel): where the L pixels hold
+  /// one id (most runs), it is looked up once.
+  template <int L>
+  EDGEPLANE_INLINE void lanes(int x, int y, std::int32_t* out) const {
+    const std::int32_t* cr = &cand(x, y);
+    const std::int32_t c0 = cr[0];
+    std::int32_t differ = 0;
+    for (int l = 0; l < L; ++l) differ |= cr[l] ^ c0;
+    if (differ == 0) {
+      const std::int32_t v = table[c0];
+      for (int l = 0; l < L; ++l) out[l] = v;
+      return;
+    }
+    for (int l = 0; l < L; ++l) out[l] = table[cr[l]];
   }
 };
 /// The rectangle [x0, x1] x [y0, y1] of view v as a view of its own (same pitch).
@@ -361,6 +385,7 @@ class segmenter {
       std::int32_t* scan = scan_.data();
       const std::int32_t* count = count_.data();
       std::int32_t k = 0, list[max_block];
+      kept_roots_.clear();
       for (std::int64_t blk = 0; blk < blocks; ++blk) {
         const std::int32_t m = block_roots_[static_cast<std::size_t>(blk)];
         std::copy(flags + blk * block, flags + blk * block + m, list);
@@ -370,6 +395,7 @@ class segmenter {
           k += keep;
           flags[r] = keep;
           scan[r] = k;  // the inclusive scan of the flags, at r
+          if (keep) kept_roots_.push_back(r);
         }
       }
       return k;
@@ -394,6 +420,129 @@ class segmenter {
                        moments_.data(), bbox_.data(), row_begin, row_end);
     download_fits(num, fits_, first);
   }
+
+  // Host backends, a split round: each piece's candidate (read at its root before the ids are
+  // written; a piece lies in one candidate), with cand the whole candidate image, [x0, x1] x
+  // [y0, y1] the round's rectangle, kept_roots_ its union-find's kept roots in order.
+  void split_parents(image_view<const std::int32_t> cand, int x0, int y0, int x1, std::int32_t added) {
+    const int rw = x1 - x0 + 1;
+    piece_of_.resize(static_cast<std::size_t>(added) + 1);
+    piece_size_.resize(static_cast<std::size_t>(added) + 1);
+    for (std::int32_t k = 1; k <= added; ++k) {
+      const std::int32_t r = kept_roots_[static_cast<std::size_t>(k - 1)];
+      piece_of_[static_cast<std::size_t>(k)] = cand(x0 + r % rw, y0 + r / rw);
+      piece_size_[static_cast<std::size_t>(k)] = count_.data()[r];
+    }
+  }
+
+  // Host backends: the moment blocks, boxes and fits of a split round's pieces, candidates
+  // num_cand+1 .. num_cand+added, after their ids are written (split_parents before that), in rows
+  // [y0, y1].  Where a split candidate's largest piece outweighs the pixels of it that no piece took
+  // (its rim and dropped components, which keep its id), that piece is not summed: its sums are
+  // the candidate's less those of the rest and of its other pieces (integers: exactly the piece's
+  // own sums), so a candidate that loses only its rim costs the sums of its rim.  That piece's box
+  // is its candidate's (a box around its pixels, which is all a box serves for: the next round's
+  // rectangle).
+  void split_refit(image_view<const float> z, const intrinsics& kp, image_view<const std::int32_t> cand, int y0,
+                   int y1, std::int32_t num_cand, std::int32_t added) {
+    const std::size_t slots = moment_slots;
+    const std::int32_t total = num_cand + added;
+    largest_.assign(static_cast<std::size_t>(num_cand) + 1, 0);      // candidate -> its largest piece
+    rest_size_.assign(static_cast<std::size_t>(num_cand) + 1, 0);   // its pixels that no piece took
+    for (std::int32_t k = 1; k <= added; ++k) {
+      const std::int32_t c = piece_of_[static_cast<std::size_t>(k)];
+      std::int32_t& big = largest_[static_cast<std::size_t>(c)];
+      if (big == 0) rest_size_[static_cast<std::size_t>(c)] = static_cast<std::int64_t>(host_moments_[static_cast<std::size_t>(c) * slots + 10]);
+      rest_size_[static_cast<std::size_t>(c)] -= piece_size_[static_cast<std::size_t>(k)];
+      if (big == 0 || piece_size_[static_cast<std::size_t>(k)] > piece_size_[static_cast<std::size_t>(big)]) big = k;
+    }
+    // labels: piece k -> k unless derived (0), a derived piece's candidate -> added + 1, ...
+    label_table_.assign(static_cast<std::size_t>(total) + 1, 0);
+    for (std::int32_t k = 1; k <= added; ++k) label_table_[static_cast<std::size_t>(num_cand + k)] = k;
+    std::int32_t labels = added;
+    std::int64_t saved = 0;  // pixels' sums saved
+    for (std::int32_t c = 1; c <= num_cand; ++c) {
+      const std::int32_t big = largest_[static_cast<std::size_t>(c)];
+      if (big != 0 && rest_size_[static_cast<std::size_t>(c)] < piece_size_[static_cast<std::size_t>(big)]) {
+        label_table_[static_cast<std::size_t>(num_cand + big)] = 0;
+        label_table_[static_cast<std::size_t>(c)] = ++labels;
+        saved += piece_size_[static_cast<std::size_t>(big)] - rest_size_[static_cast<std::size_t>(c)];
+      } else {
+        largest_[static_cast<std::size_t>(c)] = 0;  // summed directly
+      }
+    }
+    // The table's labels cost more per pixel read than the ids' own (candidate_image_labels): a
+    // pixel's sums cost about as much as reading 4 pixels that way (2-core Xeon VM: a TUM frame,
+    // 39 000 pixels' sums saved over 295 000 read, was 7 % slower in validation).  So the pieces
+    // are summed directly unless the saving outweighs that.
+    if (saved * 10 < static_cast<std::int64_t>(y1 - y0 + 1) * cand.width * 3) {
+      refit_candidates(z, kp, total, num_cand, y0, y1 + 1);
+      return;
+    }
+    moments_.resize(static_cast<std::size_t>(labels + 1) * slots);
+    bbox_.resize(static_cast<std::size_t>(labels + 1) * 4);
+    accumulate_moments(b_, z, kp, detail::candidate_table_labels{cand, label_table_.data()}, labels, moments_.data(),
+                       bbox_.data(), y0, y1 + 1);
+    const std::uint64_t* m = moments_.data();
+    const std::int32_t* bb = bbox_.data();
+    host_moments_.resize(static_cast<std::size_t>(total + 1) * slots);
+    host_bbox_.resize(static_cast<std::size_t>(total + 1) * 4);
+    for (std::int32_t k = 1; k <= added; ++k) {
+      std::uint64_t* dst = host_moments_.data() + static_cast<std::size_t>(num_cand + k) * slots;
+      std::int32_t* box = host_bbox_.data() + static_cast<std::size_t>(num_cand + k) * 4;
+      const std::int32_t c = piece_of_[static_cast<std::size_t>(k)];
+      if (largest_[static_cast<std::size_t>(c)] != k) {
+        std::copy_n(m + static_cast<std::size_t>(k) * slots, slots, dst);
+        std::copy_n(bb + static_cast<std::size_t>(k) * 4, 4, box);
+        continue;
+      }
+      // the candidate's sums less its rest's and its other pieces' (wrapping uint64: exact)
+      const std::uint64_t* whole = host_moments_.data() + static_cast<std::size_t>(c) * slots;
+      const std::uint64_t* rest = m + static_cast<std::size_t>(label_table_[static_cast<std::size_t>(c)]) * slots;
+      for (std::size_t j = 0; j < slots; ++j) dst[j] = whole[j] - rest[j];
+      for (std::int32_t o = 1; o <= added; ++o)
+        if (o != k && piece_of_[static_cast<std::size_t>(o)] == c)
+          for (std::size_t j = 0; j < slots; ++j) dst[j] -= m[static_cast<std::size_t>(o) * slots + j];
+      std::copy_n(host_bbox_.data() + static_cast<std::size_t>(c) * 4, 4, box);
+    }
+    fits_.resize(static_cast<std::size_t>(total));
+    for (std::int32_t k = num_cand + 1; k <= total; ++k)
+      fits_[static_cast<std::size_t>(k - 1)] = fit_plane(host_moments_.data() + static_cast<std::size_t>(k) * slots,
+                                                         host_bbox_.data() + static_cast<std::size_t>(k) * 4);
+#if defined(EDGEPLANE_VERIFY_SPLIT_SUMS)
+    // (tests) the pieces summed directly give the very same blocks, in boxes within theirs
+    verify_moments_.assign(host_moments_.begin(), host_moments_.end());
+    verify_bbox_.assign(host_bbox_.begin(), host_bbox_.end());
+    verify_fits_.assign(fits_.begin(), fits_.end());
+    refit_candidates(z, kp, total, num_cand, y0, y1 + 1);  // the pieces' blocks summed from their ids
+    for (std::int32_t k = num_cand + 1; k <= total; ++k) {
+      const std::uint64_t* direct = moments_.data() + static_cast<std::size_t>(k) * slots;
+      const std::uint64_t* got = verify_moments_.data() + static_cast<std::size_t>(k) * slots;
+      const std::int32_t* box = bbox_.data() + static_cast<std::size_t>(k) * 4;
+      const std::int32_t* got_box = verify_bbox_.data() + static_cast<std::size_t>(k) * 4;
+      detail::require(std::equal(direct, direct + slots, got) && got_box[0] <= box[0] && got_box[1] <= box[1] &&
+                          got_box[2] >= box[2] && got_box[3] >= box[3],
+                      "split_refit: candidate " + std::to_string(k) + "'s sums differ from its direct sums");
+      if (largest_[static_cast<std::size_t>(piece_of_[static_cast<std::size_t>(k - num_cand)])] == k - num_cand)
+        ++verified_derived_pieces;
+    }
+    host_moments_.swap(verify_moments_);  // go on with what the segmenter computed
+    host_bbox_.swap(verify_bbox_);
+    fits_.swap(verify_fits_);
+#endif
+  }
+#if defined(EDGEPLANE_VERIFY_SPLIT_SUMS)
+  std::vector<std::uint64_t> verify_moments_;
+  std::vector<std::int32_t> verify_bbox_;
+  std::vector<plane_fit> verify_fits_;
+
+ public:
+  /// (tests, with EDGEPLANE_VERIFY_SPLIT_SUMS) split pieces whose sums were derived by
+  /// subtraction and checked against their direct sums
+  std::int64_t verified_derived_pieces = 0;
+
+ private:
+#endif
 
   template <class In>
   void run(image_view<const In> depth_in, float scale, const intrinsics& k, image_view<std::uint16_t> labels_out,
@@ -529,10 +678,14 @@ class segmenter {
           components(n_r, eroded, n_r,
                      detail::grid4_adjacency<detail::mask_bit_active>{z_r, eroded, p_.t_je, p_.t_je_quad, slope_inv_f},
                      p_.t_size);
+      if constexpr (Backend::host_accessible) split_parents(image_view<const std::int32_t>(cand), x0, y0, x1, added);
       detail::for_each_pixel(b_, cand_r.width, cand_r.height,
                              detail::write_members_kernel{parent_.data(), flags_.data(), scan_.data(), num_cand, cand_r});
       if (added == 0) break;
-      refit_candidates(z, kp, num_cand + added, num_cand, y0, y1 + 1);
+      if constexpr (Backend::host_accessible)
+        split_refit(z, kp, image_view<const std::int32_t>(cand), y0, y1, num_cand, added);
+      else
+        refit_candidates(z, kp, num_cand + added, num_cand, y0, y1 + 1);
       num_cand += added;
       for (int c = num_cand - added; c < num_cand; ++c) status_.push_back(is_plane(fits_[c], p_) ? 1 : 0);
     }
@@ -778,6 +931,9 @@ class segmenter {
   std::vector<int> group_, merge_parent_;
   std::vector<std::uint8_t> host_failed_;
   std::vector<std::int32_t> block_roots_;  // roots listed per block (host backends' numbering)
+  std::vector<std::int32_t> kept_roots_;   // the kept roots in order (host backends' numbering)
+  std::vector<std::int32_t> piece_of_, largest_, label_table_;  // split rounds' tables (host backends)
+  std::vector<std::int64_t> piece_size_, rest_size_;
   std::vector<std::uint16_t> right_bits_;  // host backends' union-find: right joins per block of 16
   std::vector<std::uint16_t> host_table_, region_origin_;
   std::vector<float> host_planes_, host_tol_;
