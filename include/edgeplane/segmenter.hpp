@@ -176,19 +176,12 @@ struct candidate_table_labels {
   image_view<const std::int32_t> cand;
   const std::int32_t* table;
   std::int32_t operator()(int x, int y) const { return table[cand(x, y)]; }
-  /// out[l] = (*this)(x + l, y) for l < L (host lanes of moments_kernel): where the L pixels hold
-  /// one id (most runs), it is looked up once.
+  /// out[l] = (*this)(x + l, y) for l < L (host lanes of moments_kernel): one vector gather.
+  /// (Looking the id up once where the L pixels hold one, after a test that they do, made the
+  /// pass slower per pixel than candidate_image_labels' by about a tenth of a pixel's sums.)
   template <int L>
   EDGEPLANE_INLINE void lanes(int x, int y, std::int32_t* out) const {
     const std::int32_t* cr = &cand(x, y);
-    const std::int32_t c0 = cr[0];
-    std::int32_t differ = 0;
-    for (int l = 0; l < L; ++l) differ |= cr[l] ^ c0;
-    if (differ == 0) {
-      const std::int32_t v = table[c0];
-      for (int l = 0; l < L; ++l) out[l] = v;
-      return;
-    }
     for (int l = 0; l < L; ++l) out[l] = table[cr[l]];
   }
 };
@@ -460,24 +453,14 @@ class segmenter {
     label_table_.assign(static_cast<std::size_t>(total) + 1, 0);
     for (std::int32_t k = 1; k <= added; ++k) label_table_[static_cast<std::size_t>(num_cand + k)] = k;
     std::int32_t labels = added;
-    std::int64_t saved = 0;  // pixels' sums saved
     for (std::int32_t c = 1; c <= num_cand; ++c) {
       const std::int32_t big = largest_[static_cast<std::size_t>(c)];
       if (big != 0 && rest_size_[static_cast<std::size_t>(c)] < piece_size_[static_cast<std::size_t>(big)]) {
         label_table_[static_cast<std::size_t>(num_cand + big)] = 0;
         label_table_[static_cast<std::size_t>(c)] = ++labels;
-        saved += piece_size_[static_cast<std::size_t>(big)] - rest_size_[static_cast<std::size_t>(c)];
       } else {
         largest_[static_cast<std::size_t>(c)] = 0;  // summed directly
       }
-    }
-    // The table's labels cost more per pixel read than the ids' own (candidate_image_labels): a
-    // pixel's sums cost about as much as reading 4 pixels that way (2-core Xeon VM: a TUM frame,
-    // 39 000 pixels' sums saved over 295 000 read, was 7 % slower in validation).  So the pieces
-    // are summed directly unless the saving outweighs that.
-    if (saved * 10 < static_cast<std::int64_t>(y1 - y0 + 1) * cand.width * 3) {
-      refit_candidates(z, kp, total, num_cand, y0, y1 + 1);
-      return;
     }
     moments_.resize(static_cast<std::size_t>(labels + 1) * slots);
     bbox_.resize(static_cast<std::size_t>(labels + 1) * 4);
