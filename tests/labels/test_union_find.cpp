@@ -339,6 +339,10 @@ TEST_CASE_TEMPLATE("erode_failed: the separable erosion marks exactly the pixels
       for (int y = y0; y < y1; ++y)
         for (int x = x0; x < x1; ++x) cand[static_cast<std::size_t>(y) * w + x] = id;
     }
+    // and one large failed block (runs of full windows far longer than the 8 bytes the host
+    // finds their ends by), cut by the noise below
+    for (int y = 4; y < h - 4; ++y)
+      for (int x = 9; x < w - 9; ++x) cand[static_cast<std::size_t>(y) * w + x] = y < h / 2 ? 3 : 5;
     for (int k = 0; k < 110 * (w / 157 + 1); ++k) cand[static_cast<std::size_t>(next(h)) * w + next(w)] = next(7);
     const std::vector<std::uint8_t> failed = {0, 1, 0, 1, 0, 1, 0};
     for (const B& b : variants<B>()) {

@@ -23,6 +23,7 @@
 
 #include "edgeplane/backend/atomic.hpp"
 #include "edgeplane/config.hpp"
+#include "edgeplane/detail/swar.hpp"
 #include "edgeplane/image.hpp"
 
 namespace edgeplane {
@@ -333,10 +334,17 @@ struct eroded_rows_kernel {
           }
           if (!any) break;
         }
-        int run = 0;  // consecutive columns of bit 0 ending at l
-        for (int l = 0; l < m; ++l) {
-          run = (v[l] & 1) ? run + 1 : 0;
-          if (run >= full) v[l - r] = static_cast<std::uint8_t>(v[l - r] | 2);
+        // bit 1 at the centres of 2r + 1 consecutive such columns: over each stretch [a', b') of
+        // them (v is 0 or 1 here; stretches found 8 bytes at a time), the columns a' + r .. b' - 1 - r.
+        // (A counter of consecutive columns, pixel by pixel, took most of the pass where a
+        // large candidate failed.)
+        for (int l = 0; l < m;) {
+          while (l + 8 <= m && swar::load(v + l) == 0) l += 8;
+          while (l < m && v[l] == 0) ++l;
+          const int first = l;
+          while (l + 8 <= m && swar::load(v + l) == swar::ones8) l += 8;
+          while (l < m && v[l] != 0) ++l;
+          for (int q = first + r; q < l - r; ++q) v[q] = 3;
         }
       }
       a = b;
