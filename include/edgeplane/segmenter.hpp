@@ -171,19 +171,14 @@ struct write_members_kernel {
   }
 };
 /// Labels from a candidate-id image through a table (host backends' sums of a split round's
-/// pieces): pixel (x, y) gets table[cand(x, y)] (ids 0 .. the table's last).
+/// pieces): pixel (x, y) gets table[cand(x, y)] (ids 0 .. the table's last).  No lanes<L> of its
+/// own: moments_kernel's per-lane fallback is the same gather.  (Looking the id up once where 8
+/// pixels hold one, after a test that they do, made the pass slower per pixel than
+/// candidate_image_labels' by about a tenth of a pixel's sums.)
 struct candidate_table_labels {
   image_view<const std::int32_t> cand;
   const std::int32_t* table;
   std::int32_t operator()(int x, int y) const { return table[cand(x, y)]; }
-  /// out[l] = (*this)(x + l, y) for l < L (host lanes of moments_kernel): one vector gather.
-  /// (Looking the id up once where the L pixels hold one, after a test that they do, made the
-  /// pass slower per pixel than candidate_image_labels' by about a tenth of a pixel's sums.)
-  template <int L>
-  EDGEPLANE_INLINE void lanes(int x, int y, std::int32_t* out) const {
-    const std::int32_t* cr = &cand(x, y);
-    for (int l = 0; l < L; ++l) out[l] = table[cr[l]];
-  }
 };
 /// The rectangle [x0, x1] x [y0, y1] of view v as a view of its own (same pitch).
 template <class T>
