@@ -706,6 +706,14 @@ class segmenter {
     planes_.resize(host_planes_.size());
     tol_.resize(host_tol_.size());
     b_.copy_from_host(table_.data(), host_table_.data(), host_table_.size() * sizeof(std::uint16_t));
+    // The plane image (each pixel's merged plane, 0 for none): the refit passes read it, and the
+    // final labels (stage 7) start from it.
+    lab_a_.resize(n);
+    const auto plane_image = view(lab_a_.data(), pw_, ph_);
+    detail::for_each_pixel(b_, pw_, ph_,
+                           detail::relabel_kernel<detail::candidate_image_labels>{
+                               detail::candidate_image_labels{cand}, table_.data(), plane_image});
+    const image_view<const std::uint16_t> planes_of(plane_image);
     // Robust refit: twice, keep only the candidate pixels within 2.5 RMS residuals of their plane
     // (the rim of a neighbouring face that a candidate picks up at a crease biases the fit).  Each
     // pass sums only the pixels whose membership changed (detail::inlier_change_labels: label g
@@ -730,7 +738,7 @@ class segmenter {
       const float* before_planes = pass == 0 ? refit_planes_.data() : planes_.data();
       const float* before_tol = pass == 0 ? refit_tol_.data() : tol_.data();
       accumulate_moments(b_, z, kp,
-                         detail::inlier_change_labels{cand, table_.data(), before_planes, before_tol,
+                         detail::inlier_change_labels{planes_of, before_planes, before_tol,
                                                       refit_planes_.data(), refit_tol_.data(), num_planes, z,
                                                       detail::make_projector(kp), pass == 0},
                          changes, moments_.data(), bbox_.data());
@@ -744,7 +752,7 @@ class segmenter {
       if (!consistent) {
         moments_.resize(slots);
         accumulate_moments(b_, z, kp,
-                           detail::inlier_labels{cand, table_.data(), refit_planes_.data(), refit_tol_.data(), z,
+                           detail::inlier_labels{planes_of, refit_planes_.data(), refit_tol_.data(), z,
                                                  detail::make_projector(kp)},
                            num_planes, moments_.data(), bbox_.data());
         b_.copy_to_host(host_moments_.data(), moments_.data(), slots * sizeof(std::uint64_t));
@@ -758,13 +766,9 @@ class segmenter {
     b_.synchronize();
     out.times.merge = ms_since(t);
 
-    // ---- 7. final labels: relabel, plane-guided growth, closing, upsampling ---------------------
-    lab_a_.resize(n);
+    // ---- 7. final labels: the plane image, plane-guided growth, closing, upsampling -----------
     lab_b_.resize(n);
     auto la = view(lab_a_.data(), pw_, ph_), lb = view(lab_b_.data(), pw_, ph_);
-    detail::for_each_pixel(b_, pw_, ph_,
-                           detail::relabel_kernel<detail::candidate_image_labels>{
-                               detail::candidate_image_labels{cand}, table_.data(), la});
     const detail::projector proj = detail::make_projector(kp);
     const detail::noise_sigma sigma = detail::make_noise(p_.noise);
     // Growth stops early once a round assigns nothing (the flag is read every 4 rounds, so a device

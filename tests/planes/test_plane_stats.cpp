@@ -38,6 +38,12 @@ double angle_deg(const Eigen::Vector3d& a, vec3 b) {
   return std::acos(std::min(1.0, std::max(-1.0, c))) * 180.0 / 3.14159265358979;
 }
 
+// The plane image of candidate ids under a merge table (what the segmenter's relabel writes).
+std::vector<std::uint16_t> planes_of(const std::vector<std::int32_t>& cand, const std::vector<std::uint16_t>& table) {
+  std::vector<std::uint16_t> out(cand.size());
+  for (std::size_t i = 0; i < cand.size(); ++i) out[i] = cand[i] > 0 ? table[static_cast<std::size_t>(cand[i])] : 0;
+  return out;
+}
 }  // namespace
 
 TEST_CASE_TEMPLATE("fit_plane: the moments of a ray-cast plane give its normal (0.1 deg) and d (1 mm)", B,
@@ -222,11 +228,11 @@ TEST_CASE_TEMPLATE("inlier_labels: the refit ignores a candidate's off-plane rim
     CAPTURE(variant_name(b));
     device_array<float, B> z(b, depth), pl(b, planes), tl(b, tol);
     device_array<std::int32_t, B> c(b, cand);
-    device_array<std::uint16_t, B> tb(b, table);
+    device_array<std::uint16_t, B> of_plane(b, planes_of(cand, table));
     device_array<std::uint64_t, B> m(b, 2 * moment_slots, 0);
     device_array<std::int32_t, B> bb(b, 8, 0);
     accumulate_moments(b, z.cview(w, h), k,
-                       detail::inlier_labels{c.cview(w, h), tb.data(), pl.data(), tl.data(), z.cview(w, h),
+                       detail::inlier_labels{of_plane.cview(w, h), pl.data(), tl.data(), z.cview(w, h),
                                              detail::make_projector(k)},
                        1, m.data(), bb.data());
     const auto mh = m.host();
@@ -457,7 +463,8 @@ candidate_scene noisy_candidates(const intrinsics& k, int w, int h, vec3 n, doub
     }
   return s;
 }
-// Lanes of 8 from every start column of every row that differ from the per-pixel labels.
+// Lanes of 8 and of 16 from every start column of every row that differ from the per-pixel
+// labels (and, for a sparse source, runs of 16 whose "any label" answer is wrong).
 template <class Labels>
 int lane_mismatches(const Labels& lab, int w, int h) {
   int mismatches = 0;
@@ -466,6 +473,19 @@ int lane_mismatches(const Labels& lab, int w, int h) {
       std::int32_t out[8];
       lab.template lanes<8>(x, y, out);
       for (int l = 0; l < 8; ++l) mismatches += out[l] != lab(x + l, y);
+      if (x + 16 > w) continue;
+      std::int32_t wide[16];
+      lab.template lanes<16>(x, y, wide);
+      bool any = false;
+      for (int l = 0; l < 16; ++l) {
+        mismatches += wide[l] != lab(x + l, y);
+        any = any || lab(x + l, y) != 0;
+      }
+      if constexpr (detail::has_sparse_lanes<Labels>) {
+        std::int32_t sparse[16];
+        mismatches += lab.template sparse_lanes<16>(x, y, sparse) != any;
+        for (int l = 0; l < 16; ++l) mismatches += sparse[l] != lab(x + l, y);
+      }
     }
   return mismatches;
 }
@@ -493,8 +513,9 @@ TEST_CASE("inlier_labels::lanes: 8 labels at once equal the per-pixel labels, an
     REQUIRE(bx >= 0);
     tol[2] = detail::plane_distance(planes.data(), 2, proj(bx, 0, depth[static_cast<std::size_t>(bx)]));
   }
-  const detail::inlier_labels lab{make_view<const std::int32_t>(cand.data(), w, h), table.data(), planes.data(),
-                                  tol.data(), make_view<const float>(depth.data(), w, h), proj};
+  const auto of_plane = planes_of(cand, table);
+  const detail::inlier_labels lab{make_view<const std::uint16_t>(of_plane.data(), w, h), planes.data(), tol.data(),
+                                  make_view<const float>(depth.data(), w, h), proj};
   static_assert(detail::has_label_lanes<detail::inlier_labels>);
   int kept = 0, dropped = 0;
   CHECK(lane_mismatches(lab, w, h) == 0);
@@ -536,10 +557,13 @@ TEST_CASE_TEMPLATE("inlier_change_labels: the moments of the pixels that joined 
   const std::vector<float> tol_a = {0.f, 0.01f, 0.006f}, tol_b = {0.f, 0.007f, 0.009f};
   const auto proj = detail::make_projector(k);
   const int np = 2;
+  const auto of_plane = planes_of(cand, table);
+  static_assert(detail::has_sparse_lanes<detail::inlier_change_labels>);
+  static_assert(!detail::has_sparse_lanes<detail::inlier_labels>);
   // Lane form against the per-pixel form, both modes, on the host.
   for (const bool all : {false, true}) {
     CAPTURE(all);
-    const detail::inlier_change_labels lab{make_view<const std::int32_t>(cand.data(), w, h), table.data(),
+    const detail::inlier_change_labels lab{make_view<const std::uint16_t>(of_plane.data(), w, h),
                                            planes_a.data(), tol_a.data(), planes_b.data(), tol_b.data(), np,
                                            make_view<const float>(depth.data(), w, h), proj, all};
     int joined = 0, left = 0;
@@ -557,8 +581,7 @@ TEST_CASE_TEMPLATE("inlier_change_labels: the moments of the pixels that joined 
   for (const B& b : variants<B>()) {
     CAPTURE(variant_name(b));
     device_array<float, B> z(b, depth), pa(b, planes_a), pb(b, planes_b), ta(b, tol_a), tb(b, tol_b);
-    device_array<std::int32_t, B> c(b, cand);
-    device_array<std::uint16_t, B> tbl(b, table);
+    device_array<std::uint16_t, B> op(b, of_plane);
     const std::size_t slots = (np + 1) * moment_slots;
     auto sums = [&](const auto& labels, int num) {
       device_array<std::uint64_t, B> m(b, static_cast<std::size_t>(num + 1) * moment_slots, 7);
@@ -567,10 +590,10 @@ TEST_CASE_TEMPLATE("inlier_change_labels: the moments of the pixels that joined 
       return m.host();
     };
     auto inliers = [&](const device_array<float, B>& pl, const device_array<float, B>& tl) {
-      return sums(detail::inlier_labels{c.cview(w, h), tbl.data(), pl.data(), tl.data(), z.cview(w, h), proj}, np);
+      return sums(detail::inlier_labels{op.cview(w, h), pl.data(), tl.data(), z.cview(w, h), proj}, np);
     };
     auto change = [&](bool all) {
-      return sums(detail::inlier_change_labels{c.cview(w, h), tbl.data(), pa.data(), ta.data(), pb.data(), tb.data(), np,
+      return sums(detail::inlier_change_labels{op.cview(w, h), pa.data(), ta.data(), pb.data(), tb.data(), np,
                                                z.cview(w, h), proj, all},
                   2 * np);
     };
@@ -584,9 +607,6 @@ TEST_CASE_TEMPLATE("inlier_change_labels: the moments of the pixels that joined 
     auto from_a = corrected(in_a, change(false));
     CHECK(std::equal(from_a.begin() + moment_slots, from_a.end(), in_b.begin() + moment_slots));
     // From every candidate pixel of each plane (the candidates' sums: pixels without depth in slot 10).
-    std::vector<std::uint16_t> of_plane(cand.size());
-    for (std::size_t i = 0; i < cand.size(); ++i) of_plane[i] = table[static_cast<std::size_t>(cand[i])];
-    device_array<std::uint16_t, B> op(b, of_plane);
     auto from_all = corrected(sums(detail::image_labels{op.cview(w, h)}, np), change(true));
     CHECK(std::equal(from_all.begin() + moment_slots, from_all.end(), in_b.begin() + moment_slots));
   }

@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <cstring>
 #include <string>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -75,64 +76,63 @@ struct plane_tolerance {
 };
 
 /// The host lanes of the inlier label sources: out[l] = decide(g, p, on, valid) for pixels x + l
-/// (l < L) of row y, where g is the plane of the pixel's candidate (table[cand]), p its point, on
-/// whether it has a plane and valid whether its depth is.  Where the L pixels belong to one
-/// candidate or to none (most runs: candidates are separated by edge pixels), its plane is looked
-/// up once and the lanes decide in vector registers (decide's plane coefficients are then loop
-/// invariants); where none has a plane, out is 0 without a decision; elsewhere each lane looks up
-/// its own, without branches (a lane without a candidate reads entry 0 of the tables, which
-/// always exists, and is off).  decide must give 0 for lanes that are off.  It takes the plane's
-/// coefficients as load(g) returns them, loaded once per run in the one-candidate case (g++ kept
-/// their loads inside the vector loop otherwise).
+/// (l < L) of row y, where g is the pixel's plane (the plane image: its candidate's merged plane,
+/// table[cand], 0 for none), p its point, on whether it has a plane and valid whether its depth is.
+/// Where the L pixels belong to one plane or to none (most runs: planes meet at edge pixels), its
+/// coefficients are loaded once and the lanes decide in vector registers (decide's plane
+/// coefficients are then loop invariants); where none has a plane, out is 0 without a decision;
+/// elsewhere each lane loads its own, without branches (a lane without a plane reads entry 0 of
+/// the tables, which always exists, and is off).  decide must give 0 for lanes that are off.  It
+/// takes the plane's coefficients as load(g) returns them, loaded once per run in the one-plane
+/// case (g++ kept their loads inside the vector loop otherwise).
 template <int L, class Load, class Decide>
-EDGEPLANE_HD EDGEPLANE_INLINE void inlier_lanes(image_view<const std::int32_t> cand, const std::uint16_t* table,
-                                                image_view<const float> depth, projector proj, int x, int y,
-                                                std::int32_t* out, Load load, Decide decide) {
-  const std::int32_t* cr = &cand(x, y);
-  std::int32_t c0 = cr[0];  // the largest id, and whether every other is 0 (or negative)
+EDGEPLANE_HD EDGEPLANE_INLINE void inlier_lanes(image_view<const std::uint16_t> plane, image_view<const float> depth,
+                                                projector proj, int x, int y, std::int32_t* out, Load load,
+                                                Decide decide) {
+  std::int32_t g[L];  // widened from one copy of the L labels
+  {
+    std::uint16_t v[L];
+    std::memcpy(v, &plane(x, y), sizeof v);
+    for (int l = 0; l < L; ++l) g[l] = v[l];
+  }
+  std::int32_t g0 = g[0];  // the largest plane, and whether every other lane has it or none
   EDGEPLANE_VECTOR_LOOP
-  for (int l = 0; l < L; ++l) c0 = cr[l] > c0 ? cr[l] : c0;
-  unsigned others = 0;
-  EDGEPLANE_VECTOR_LOOP
-  for (int l = 0; l < L; ++l) others |= static_cast<unsigned>((cr[l] != c0) & (cr[l] > 0));
-  const bool one = others == 0;
-  const std::int32_t g = one && c0 > 0 ? table[c0] : 0;
-  if (one && g == 0) {  // no candidate, or one that joined no plane
+  for (int l = 0; l < L; ++l) g0 = g[l] > g0 ? g[l] : g0;
+  if (g0 == 0) {
     for (int l = 0; l < L; ++l) out[l] = 0;
     return;
   }
+  std::int32_t others = 0;
+  EDGEPLANE_VECTOR_LOOP
+  for (int l = 0; l < L; ++l) others |= (g[l] != g0) & (g[l] != 0);
   const float* zr = &depth(x, y);
-  if (!one) {
+  if (others) {
     for (int l = 0; l < L; ++l) {
-      const std::int32_t c = cr[l];
-      const std::int32_t gl = c > 0 ? static_cast<std::int32_t>(table[c > 0 ? c : 0]) : 0;
       const float z = zr[l];
-      out[l] = decide(gl, load(gl), proj(x + l, y, z), gl != 0, z > 0.f);
+      out[l] = decide(g[l], load(g[l]), proj(x + l, y, z), g[l] != 0, z > 0.f);
     }
     return;
   }
-  const auto coefficients = load(g);
+  const auto coefficients = load(g0);
   EDGEPLANE_VECTOR_LOOP  // (completely unrolled first, g++ 12 left this loop scalar)
   for (int l = 0; l < L; ++l) {
     const float z = zr[l];
-    out[l] = decide(g, coefficients, proj(x + l, y, z), cr[l] == c0, z > 0.f);
+    out[l] = decide(g0, coefficients, proj(x + l, y, z), g[l] != 0, z > 0.f);
   }
 }
 
-/// Inliers of merged candidates: pixel i counts for plane g = table[cand(i)] only when its point
-/// lies within tol[g] metres of that plane (planes: nx, ny, nz, d per plane, index 0 unused).
-/// Used to refit planes without the rim pixels a candidate picks up at creases.
+/// Inliers of merged candidates: pixel i counts for its plane g = plane(i) (the merged plane of its
+/// candidate, 0 for none) only when its point lies within tol[g] metres of that plane (planes: nx,
+/// ny, nz, d per plane, index 0 unused).  Used to refit planes without the rim pixels a candidate
+/// picks up at creases.
 struct inlier_labels {
-  image_view<const std::int32_t> cand;
-  const std::uint16_t* table;
+  image_view<const std::uint16_t> plane;
   const float* planes;
   const float* tol;
   image_view<const float> depth;
   projector proj;
   EDGEPLANE_HD std::int32_t operator()(int x, int y) const {
-    const std::int32_t c = cand(x, y);
-    if (c <= 0) return 0;
-    const std::int32_t g = table[c];
+    const std::int32_t g = plane(x, y);
     const float z = depth(x, y);
     if (g == 0 || !(z > 0.f)) return 0;
     const point3 p = proj(x, y, z);
@@ -142,7 +142,7 @@ struct inlier_labels {
   template <int L>
   EDGEPLANE_HD EDGEPLANE_INLINE void lanes(int x, int y, std::int32_t* out) const {
     inlier_lanes<L>(
-        cand, table, depth, proj, x, y, out, [&](std::int32_t g) { return plane_tolerance::of(planes, tol, g); },
+        plane, depth, proj, x, y, out, [&](std::int32_t g) { return plane_tolerance::of(planes, tol, g); },
         [](std::int32_t g, const plane_tolerance& q, point3 p, bool on, bool valid) {
           return g & -static_cast<std::int32_t>(on & valid & q.holds(p));  // by bits: with ?: g++ branched per lane
         });
@@ -151,17 +151,16 @@ struct inlier_labels {
 
 /// The pixels whose inlier_labels membership differs between two plane sets (the robust refit's
 /// passes: `before_*` the previous pass's planes and tolerances, `planes` and `tol` this pass's):
-/// g where the pixel is an inlier of plane g = table[cand(i)] now and was not, g + num_planes
-/// where it was and is no longer, 0 elsewhere.  The moments of these labels turn the previous
-/// pass's sums into this pass's exactly (integer sums; wrapping): new[g] = old[g] + m[g] -
-/// m[g + num_planes], so a pass reads every pixel but sums only the few that changed.  Each
-/// membership is decided with inlier_labels' operations, so it is the one that pass computed.
-/// With before_all, every pixel of a candidate of plane g counts as having been in (the sums of
-/// the plane's candidates, which also count the pixels without valid depth, in slot 10 only):
-/// the labels are then g + num_planes for the pixels that are not inliers now, 0 elsewhere.
+/// g where the pixel is an inlier of its plane g = plane(i) now and was not, g + num_planes where
+/// it was and is no longer, 0 elsewhere.  The moments of these labels turn the previous pass's
+/// sums into this pass's exactly (integer sums; wrapping): new[g] = old[g] + m[g] - m[g +
+/// num_planes], so a pass reads every pixel but sums only the few that changed.  Each membership
+/// is decided with inlier_labels' operations, so it is the one that pass computed.  With
+/// before_all, every pixel of plane g counts as having been in (the sums of the plane's
+/// candidates, which also count the pixels without valid depth, in slot 10 only): the labels are
+/// then g + num_planes for the pixels that are not inliers now, 0 elsewhere.
 struct inlier_change_labels {
-  image_view<const std::int32_t> cand;
-  const std::uint16_t* table;
+  image_view<const std::uint16_t> plane;
   const float* before_planes;
   const float* before_tol;
   const float* planes;
@@ -171,11 +170,9 @@ struct inlier_change_labels {
   projector proj;
   bool before_all = false;
   EDGEPLANE_HD std::int32_t operator()(int x, int y) const {
-    const std::int32_t c = cand(x, y);
-    if (c <= 0) return 0;
-    const std::int32_t g = table[c];
-    const float z = depth(x, y);
+    const std::int32_t g = plane(x, y);
     if (g == 0) return 0;
+    const float z = depth(x, y);
     if (!(z > 0.f)) return before_all ? g + num_planes : 0;
     const point3 p = proj(x, y, z);
     const bool was = before_all || plane_distance(before_planes, g, p) <= before_tol[g];
@@ -191,7 +188,7 @@ struct inlier_change_labels {
     const std::int32_t gone = num_planes;
     const bool all = before_all;
     inlier_lanes<L>(
-        cand, table, depth, proj, x, y, out,
+        plane, depth, proj, x, y, out,
         [&](std::int32_t g) {
           return now_and_before{plane_tolerance::of(planes, tol, g), plane_tolerance::of(before_planes, before_tol, g)};
         },
@@ -200,7 +197,26 @@ struct inlier_change_labels {
           return (g & -static_cast<std::int32_t>(is & !was)) | ((g + gone) & -static_cast<std::int32_t>(was & !is));
         });
   }
+  /// Few pixels change membership: lanes<L>, and whether any of the L labels is not 0 (the host
+  /// moments then skip L pixels at once; has_sparse_lanes).
+  template <int L>
+  EDGEPLANE_HD EDGEPLANE_INLINE bool sparse_lanes(int x, int y, std::int32_t* out) const {
+    lanes<L>(x, y, out);
+    std::int32_t any = 0;
+    EDGEPLANE_VECTOR_LOOP
+    for (int l = 0; l < L; ++l) any |= out[l];
+    return any != 0;
+  }
 };
+
+/// Whether a label source has sparse_lanes<L>(x, y, out): its labels are mostly 0, and the host
+/// moments test 16 of them at once before looking at each.
+template <class Labels, class = void>
+inline constexpr bool has_sparse_lanes = false;
+template <class Labels>
+inline constexpr bool has_sparse_lanes<
+    Labels, std::enable_if_t<std::is_same_v<decltype(std::declval<const Labels&>().template sparse_lanes<16>(0, 0, nullptr)), bool>>> =
+    true;
 
 /// Whether a label source has lanes<L>(x, y, out) (the host's moments lanes use it).
 template <class Labels, class = void>
@@ -473,6 +489,14 @@ struct moments_kernel {
     std::int32_t cur = 0;
     int x0 = 0, x1 = 0, x = 0;
 #if !defined(__CUDA_ARCH__)
+    if constexpr (has_sparse_lanes<Labels>) {  // runs of 16 without a label skipped at once
+      constexpr int S = 16;
+      for (; x + S <= w; x += S) {
+        std::int32_t lab[S];
+        if (!label_of.template sparse_lanes<S>(x, y, lab)) continue;
+        for (int l = 0; l < S; ++l) step(flush, s, cur, x0, x1, lab[l], x + l, y);
+      }
+    }
     for (; x + lanes <= w;) {
       std::int32_t lab[lanes];
       load_lanes(x, y, lab);
