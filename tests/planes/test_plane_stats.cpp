@@ -464,7 +464,7 @@ candidate_scene noisy_candidates(const intrinsics& k, int w, int h, vec3 n, doub
   return s;
 }
 // Lanes of 8 and of 16 from every start column of every row that differ from the per-pixel
-// labels (and, for a sparse source, runs of 16 whose "any label" answer is wrong).
+// labels (and, for a sparse source, runs of 32 whose labels or "any label" answer are wrong).
 template <class Labels>
 int lane_mismatches(const Labels& lab, int w, int h) {
   int mismatches = 0;
@@ -476,15 +476,14 @@ int lane_mismatches(const Labels& lab, int w, int h) {
       if (x + 16 > w) continue;
       std::int32_t wide[16];
       lab.template lanes<16>(x, y, wide);
-      bool any = false;
-      for (int l = 0; l < 16; ++l) {
-        mismatches += wide[l] != lab(x + l, y);
-        any = any || lab(x + l, y) != 0;
-      }
+      for (int l = 0; l < 16; ++l) mismatches += wide[l] != lab(x + l, y);
       if constexpr (detail::has_sparse_lanes<Labels>) {
-        std::int32_t sparse[16];
-        mismatches += lab.template sparse_lanes<16>(x, y, sparse) != any;
-        for (int l = 0; l < 16; ++l) mismatches += sparse[l] != lab(x + l, y);
+        if (x + 32 > w) continue;
+        std::int32_t sparse[32];
+        bool any32 = false;
+        for (int l = 0; l < 32; ++l) any32 = any32 || lab(x + l, y) != 0;
+        mismatches += lab.template sparse_lanes<32>(x, y, sparse) != any32;
+        for (int l = 0; l < 32; ++l) mismatches += sparse[l] != lab(x + l, y);
       }
     }
   return mismatches;
