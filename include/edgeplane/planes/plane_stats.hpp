@@ -186,14 +186,21 @@ struct inlier_change_labels {
       plane_tolerance now, before;
     };
     const std::int32_t gone = num_planes;
-    const bool all = before_all;
+    if (before_all) {  // every pixel of a plane was in: no previous plane to test
+      inlier_lanes<L>(
+          plane, depth, proj, x, y, out, [&](std::int32_t g) { return plane_tolerance::of(planes, tol, g); },
+          [gone](std::int32_t g, const plane_tolerance& q, point3 p, bool on, bool valid) {
+            return (g + gone) & -static_cast<std::int32_t>(on & !(valid & q.holds(p)));
+          });
+      return;
+    }
     inlier_lanes<L>(
         plane, depth, proj, x, y, out,
         [&](std::int32_t g) {
           return now_and_before{plane_tolerance::of(planes, tol, g), plane_tolerance::of(before_planes, before_tol, g)};
         },
-        [gone, all](std::int32_t g, const now_and_before& q, point3 p, bool on, bool valid) {
-          const bool is = on & valid & q.now.holds(p), was = on & (all | (valid & q.before.holds(p)));
+        [gone](std::int32_t g, const now_and_before& q, point3 p, bool on, bool valid) {
+          const bool is = on & valid & q.now.holds(p), was = on & valid & q.before.holds(p);
           return (g & -static_cast<std::int32_t>(is & !was)) | ((g + gone) & -static_cast<std::int32_t>(was & !is));
         });
   }
