@@ -178,7 +178,7 @@ struct write_members_kernel {
 struct candidate_table_labels {
   image_view<const std::int32_t> cand;
   const std::int32_t* table;
-  std::int32_t operator()(int x, int y) const { return table[cand(x, y)]; }
+  EDGEPLANE_HD std::int32_t operator()(int x, int y) const { return table[cand(x, y)]; }
 };
 /// The rectangle [x0, x1] x [y0, y1] of view v as a view of its own (same pitch).
 template <class T>
@@ -709,11 +709,10 @@ class segmenter {
     // The plane image (each pixel's merged plane, 0 for none): the refit passes read it, and the
     // final labels (stage 7) start from it.
     lab_a_.resize(n);
-    const auto plane_image = view(lab_a_.data(), pw_, ph_);
     detail::for_each_pixel(b_, pw_, ph_,
                            detail::relabel_kernel<detail::candidate_image_labels>{
-                               detail::candidate_image_labels{cand}, table_.data(), plane_image});
-    const image_view<const std::uint16_t> planes_of(plane_image);
+                               detail::candidate_image_labels{cand}, table_.data(), view(lab_a_.data(), pw_, ph_)});
+    const image_view<const std::uint16_t> plane_image = view(lab_a_.data(), pw_, ph_);
     // Robust refit: twice, keep only the candidate pixels within 2.5 RMS residuals of their plane
     // (the rim of a neighbouring face that a candidate picks up at a crease biases the fit).  Each
     // pass sums only the pixels whose membership changed (detail::inlier_change_labels: label g
@@ -738,7 +737,7 @@ class segmenter {
       const float* before_planes = pass == 0 ? refit_planes_.data() : planes_.data();
       const float* before_tol = pass == 0 ? refit_tol_.data() : tol_.data();
       accumulate_moments(b_, z, kp,
-                         detail::inlier_change_labels{planes_of, before_planes, before_tol,
+                         detail::inlier_change_labels{plane_image, before_planes, before_tol,
                                                       refit_planes_.data(), refit_tol_.data(), num_planes, z,
                                                       detail::make_projector(kp), pass == 0},
                          changes, moments_.data(), bbox_.data());
@@ -752,7 +751,7 @@ class segmenter {
       if (!consistent) {
         moments_.resize(slots);
         accumulate_moments(b_, z, kp,
-                           detail::inlier_labels{planes_of, refit_planes_.data(), refit_tol_.data(), z,
+                           detail::inlier_labels{plane_image, refit_planes_.data(), refit_tol_.data(), z,
                                                  detail::make_projector(kp)},
                            num_planes, moments_.data(), bbox_.data());
         b_.copy_to_host(host_moments_.data(), moments_.data(), slots * sizeof(std::uint64_t));
