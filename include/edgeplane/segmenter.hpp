@@ -817,11 +817,18 @@ class segmenter {
         }
       }
     }
+    // Where the closing's labels are the final ones (no regions to split, no upsampling) and the
+    // caller's label image is in the backend's memory, the closing writes them there: no copy.
+    const bool closed_out = p_.label_closing_radius > 0 && num_planes > 0 && !p_.split_regions && !down &&
+                            (Backend::host_accessible || on_backend);
     if (p_.label_closing_radius > 0 && num_planes > 0) {
-      lab_c_.resize(n);
-      auto lc = view(lab_c_.data(), pw_, ph_);
+      image_view<std::uint16_t> lc = labels_out;
+      if (!closed_out) {
+        lab_c_.resize(n);
+        lc = view(lab_c_.data(), pw_, ph_);
+      }
       close_labels(b_, image_view<const std::uint16_t>(la), lb, lc, p_.label_closing_radius);
-      std::swap(la, lc);
+      la = lc;
     }
     // Disconnected regions of one plane (a floor seen on both sides of a table, coplanar box
     // faces) become planes of their own, each with its plane's equation; regions smaller than
@@ -880,11 +887,13 @@ class segmenter {
       else
         b_.copy_to_host(to, from, bytes);
     };
-    if (labels_out.pitch == w)  // dense: one copy
-      copy_out(labels_out.data, final_labels.data, sizeof(std::uint16_t) * n_full);
-    else
-      for (int y = 0; y < h; ++y)
-        copy_out(&labels_out(0, y), final_labels.data + static_cast<std::int64_t>(y) * w, sizeof(std::uint16_t) * w);
+    if (!closed_out) {  // (else the labels are there already)
+      if (labels_out.pitch == w)  // dense: one copy
+        copy_out(labels_out.data, final_labels.data, sizeof(std::uint16_t) * n_full);
+      else
+        for (int y = 0; y < h; ++y)
+          copy_out(&labels_out(0, y), final_labels.data + static_cast<std::int64_t>(y) * w, sizeof(std::uint16_t) * w);
+    }
     b_.synchronize();
     out.times.finalize = ms_since(t);
     out.times.total = std::chrono::duration<double, std::milli>(clock::now() - t0).count();

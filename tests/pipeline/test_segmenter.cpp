@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "edgeplane/edgeplane.hpp"
+#include "support/device_model.hpp"
 #include "support/scenes.hpp"
 
 using namespace edgeplane;
@@ -302,6 +303,71 @@ TEST_CASE("segmenter: degenerate data gives a well-defined empty result") {
     z[400] = 2.f;
     std::vector<std::uint16_t> l(z.size(), 7);
     CHECK(seg.segment(make_view(static_cast<const float*>(z.data()), 40, 30), k, make_view(l.data(), 40, 30)).planes.empty());
+  }
+}
+
+TEST_CASE("segmenter: the closing's labels written into the caller's image: pitched, in the depth's own buffer") {
+  // thesis_full closes the labels and neither splits regions nor downscales, so on the CPU the
+  // closing writes the final labels into the caller's image and the plane statistics read them there.
+  const auto s = test::room_with_box();
+  const rendered r = test::render(s, test::look_at({0.1, -1.2, 1.3}, {2.6, 0.8, 0.4}), 160, 128,
+                                  test::kinect2_intrinsics(160, 128), {0.001, 0.0005, 0.01, 41ull});
+  const params p = presets::thesis_full();
+  REQUIRE(p.label_closing_radius > 0);
+  REQUIRE(!p.split_regions);
+  REQUIRE(!p.downscale);
+  const std::vector<std::uint16_t> mm = r.depth_mm();
+  const int w = r.width, h = r.height;
+  // Reference: the device path (support/device_model.hpp: host memory that the segmenter treats
+  // as a device's), whose closing writes its own buffer, then downloaded; it gives the CPU
+  // backend's labels (test_device_path.cpp).
+  std::vector<std::uint16_t> want(mm.size(), 0xffff);
+  segmenter<edgeplane_test::device_model> ref(p);
+  const segmentation_result want_res =
+      ref.segment(make_view(static_cast<const std::uint16_t*>(mm.data()), w, h), 0.001f, r.k, make_view(want.data(), w, h));
+  REQUIRE(want_res.planes.size() >= 3);
+  auto same_planes = [&](const segmentation_result& got) {
+    REQUIRE(got.planes.size() == want_res.planes.size());
+    for (std::size_t i = 0; i < got.planes.size(); ++i) {
+      CHECK(got.planes[i].pixels == want_res.planes[i].pixels);
+      CHECK(got.planes[i].points == want_res.planes[i].points);
+      CHECK(got.planes[i].bbox == want_res.planes[i].bbox);
+      CHECK(got.planes[i].centroid == want_res.planes[i].centroid);
+    }
+  };
+  segmenter<cpu> seg(p);
+  SUBCASE("pitched rows, padding untouched") {
+    const int pitch = w + 7;
+    std::vector<std::uint16_t> out(static_cast<std::size_t>(pitch) * h, 0xbeef);
+    const auto res = seg.segment(make_view(static_cast<const std::uint16_t*>(mm.data()), w, h), 0.001f, r.k,
+                                 make_view(out.data(), w, h, pitch));
+    same_planes(res);
+    int differ = 0, padding = 0;
+    for (int y = 0; y < h; ++y) {
+      for (int x = 0; x < w; ++x) differ += out[static_cast<std::size_t>(y) * pitch + x] != want[static_cast<std::size_t>(y) * w + x];
+      for (int x = w; x < pitch; ++x) padding += out[static_cast<std::size_t>(y) * pitch + x] != 0xbeef;
+    }
+    CHECK(differ == 0);
+    CHECK(padding == 0);
+  }
+  SUBCASE("the labels over the depth they came from (one buffer in and out)") {
+    std::vector<std::uint16_t> buf = mm;
+    const auto res = seg.segment(make_view(static_cast<const std::uint16_t*>(buf.data()), w, h), 0.001f, r.k,
+                                 make_view(buf.data(), w, h));
+    same_planes(res);
+    CHECK(buf == want);
+  }
+  SUBCASE("a segmenter reused: the second frame's labels do not depend on the first's image") {
+    std::vector<std::uint16_t> first(mm.size(), 0), second(mm.size(), 0x5555);
+    std::vector<std::uint16_t> blank(mm.size(), 0);
+    seg.segment(make_view(static_cast<const std::uint16_t*>(mm.data()), w, h), 0.001f, r.k, make_view(first.data(), w, h));
+    CHECK(first == want);
+    // an all-invalid frame into another image: no planes, every label 0 (no closing runs then)
+    const auto none = seg.segment(make_view(static_cast<const std::uint16_t*>(blank.data()), w, h), 0.001f, r.k,
+                                  make_view(second.data(), w, h));
+    CHECK(none.planes.empty());
+    CHECK(std::all_of(second.begin(), second.end(), [](std::uint16_t v) { return v == 0; }));
+    CHECK(first == want);  // the first frame's image is not written again
   }
 }
 
