@@ -819,9 +819,9 @@ class segmenter {
     }
     // Where the closing's labels are the final ones (no regions to split, no upsampling) and the
     // caller's label image is in the backend's memory, the closing writes them there: no copy.
-    const bool closed_out = p_.label_closing_radius > 0 && num_planes > 0 && !p_.split_regions && !down &&
-                            (Backend::host_accessible || on_backend);
-    if (p_.label_closing_radius > 0 && num_planes > 0) {
+    const bool closing = p_.label_closing_radius > 0 && num_planes > 0;
+    const bool closed_out = closing && !p_.split_regions && !down && (Backend::host_accessible || on_backend);
+    if (closing) {
       image_view<std::uint16_t> lc = labels_out;
       if (!closed_out) {
         lab_c_.resize(n);
