@@ -89,7 +89,8 @@ template <int L, class Load, class Decide>
 EDGEPLANE_HD EDGEPLANE_INLINE void inlier_lanes(image_view<const std::uint16_t> plane, image_view<const float> depth,
                                                 projector proj, int x, int y, std::int32_t* out, Load load,
                                                 Decide decide) {
-  std::int32_t g[L];  // widened from one copy of the L labels
+  std::int32_t g[L];  // widened from one copy of the L labels, as image_labels::lanes does (calling
+                      // it here made g++ emit other code, and the refit 1-4 % slower)
   {
     std::uint16_t v[L];
     std::memcpy(v, &plane(x, y), sizeof v);
@@ -216,13 +217,17 @@ struct inlier_change_labels {
   }
 };
 
-/// Whether a label source has sparse_lanes<L>(x, y, out): its labels are mostly 0, and the host
-/// moments test 32 of them at once before looking at each.
+/// Pixels the host moments test at once for a sparse label source (runs of 16 left the merge stage
+/// 4-10 % slower, of 64 10-18 %).
+inline constexpr int sparse_run = 32;
+/// Whether a label source has sparse_lanes<sparse_run>(x, y, out): its labels are mostly 0, and
+/// the host moments test sparse_run of them at once before looking at each.
 template <class Labels, class = void>
 inline constexpr bool has_sparse_lanes = false;
 template <class Labels>
 inline constexpr bool has_sparse_lanes<
-    Labels, std::enable_if_t<std::is_same_v<decltype(std::declval<const Labels&>().template sparse_lanes<32>(0, 0, nullptr)), bool>>> =
+    Labels,
+    std::enable_if_t<std::is_same_v<decltype(std::declval<const Labels&>().template sparse_lanes<sparse_run>(0, 0, nullptr)), bool>>> =
     true;
 
 /// Whether a label source has lanes<L>(x, y, out) (the host's moments lanes use it).
@@ -496,8 +501,8 @@ struct moments_kernel {
     std::int32_t cur = 0;
     int x0 = 0, x1 = 0, x = 0;
 #if !defined(__CUDA_ARCH__)
-    if constexpr (has_sparse_lanes<Labels>) {  // runs of 32 without a label skipped at once (runs of 16 left the merge stage 4-10 % slower, of 64 10-18 %)
-      constexpr int S = 32;
+    if constexpr (has_sparse_lanes<Labels>) {  // runs without a label skipped at once
+      constexpr int S = sparse_run;
       for (; x + S <= w; x += S) {
         std::int32_t lab[S];
         if (!label_of.template sparse_lanes<S>(x, y, lab)) continue;
