@@ -126,23 +126,19 @@ struct grow_front_kernel {
       x = 1;
       px(0, y);
       if (o[0] != mid[0]) list[m++] = 0;
+      // pixel i of the row is unlabelled, valid and has a labelled 4-neighbour (0 or 1)
+      const auto can_take = [&](int i) {
+        return static_cast<unsigned>((mid[i] == 0) & (z[i] > 0.f) & ((up[i] | down[i] | mid[i - 1] | mid[i + 1]) != 0));
+      };
       for (; x + lanes < w; x += lanes) {
-        int open = 0;
-        for (int l = 0; l < lanes; ++l) {
-          const int i = x + l;
-          const int nb = (up[i] | down[i] | mid[i - 1] | mid[i + 1]) != 0;
-          open |= (mid[i] == 0) & (z[i] > 0.f) & nb;
-        }
+        unsigned open = 0;
+        for (int l = 0; l < lanes; ++l) open |= can_take(x + l);
         for (int l = 0; l < lanes; ++l) o[x + l] = mid[x + l];
         if (!open) continue;
         // only the pixels that can take a label are evaluated (about 2 of the 16 in an open run
         // on the kinect2 and TUM frames); the others keep their input, as grow_kernel leaves them
         unsigned need = 0;
-        for (int l = 0; l < lanes; ++l) {
-          const int i = x + l;
-          const int nb = (up[i] | down[i] | mid[i - 1] | mid[i + 1]) != 0;
-          need |= static_cast<unsigned>((mid[i] == 0) & (z[i] > 0.f) & nb) << l;
-        }
+        for (int l = 0; l < lanes; ++l) need |= can_take(x + l) << l;
         for (; need != 0; need &= need - 1) {
           const int i = x + lowest_bit(need);
           px(i, y);
