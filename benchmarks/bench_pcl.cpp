@@ -8,9 +8,10 @@
 // counters are the medians of those times and their ratio (PCL / edgeplane: how many times
 // faster edgeplane is).  edgeplane runs its `thesis_full` preset on both cores (`cpu`) and on one
 // (`cpu serial`), and the thesis's half-scale preset `thesis_half` (2x downscale) on both cores
-// (`cpu_half`; the targets are for full scale, this row says what half scale buys); PCL runs the configuration of its organized segmentation demo: average 3-D
-// gradient normals (max depth change 0.02, smoothing 10), 1000 minimum inliers, 3 degrees, 2 cm,
-// with refinement.  PCL's normal estimation and segmentation are single-threaded.
+// (`cpu_half`: the targets are for full scale; this row says what half scale buys).  PCL
+// runs the configuration of its organized segmentation demo: average 3-D gradient normals (max
+// depth change 0.02, smoothing 10), 1000 minimum inliers, 3 degrees, 2 cm, with refinement.
+// PCL's normal estimation and segmentation are single-threaded.
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
@@ -106,8 +107,8 @@ void register_all() {
     frames.emplace_back(std::string("sample/") + s.name, std::move(f));
   }
 #endif
+  const ep::params full = ep::presets::thesis_full(), half = ep::presets::thesis_half();
   for (const auto& [name, f] : frames) {
-    const ep::params full = ep::presets::thesis_full(), half = ep::presets::thesis_half();
     benchmark::RegisterBenchmark(("ratio/" + name + "/cpu").c_str(), ratio, f, both, full)
         ->UseManualTime()->Unit(benchmark::kMillisecond)->MinTime(1.0);
     benchmark::RegisterBenchmark(("ratio/" + name + "/cpu_serial").c_str(), ratio, f, one, full)

@@ -76,7 +76,8 @@ struct grow_kernel {
 /// buffer holds the state of two rounds before (the buffers alternate), so a row first copies in
 /// its pixels that the previous round labelled; then out(x, y) != 0 marks a pixel this round
 /// already labelled or one labelled before, and a pixel is listed once.  The first round
-/// (`first`) evaluates every pixel and writes whole rows.  A row writes only its own pixels and
+/// (`first`) gives every pixel grow_kernel's answer (evaluating only the pixels that can take a
+/// label) and writes whole rows.  A row writes only its own pixels and
 /// list, and reads the previous round's buffer and lists: race-free, and the result after every
 /// round is grow_kernel's over all pixels.
 struct grow_front_kernel {
@@ -116,9 +117,10 @@ struct grow_front_kernel {
     }
     int x = 0;
 #if !defined(__CUDA_ARCH__)
-    // Runs of 16 pixels (with both neighbouring rows and columns inside the image) where no pixel
-    // can take a label, since each is labelled, invalid, or has no labelled 4-neighbour: grow_kernel
-    // writes their input unchanged, so they are copied.
+    // Runs of 16 pixels (with both neighbouring rows and columns inside the image): a pixel that
+    // is labelled, invalid, or has no labelled 4-neighbour cannot take a label, and grow_kernel
+    // writes its input unchanged.  So each run is copied, and grow_kernel evaluates only the
+    // others (none in most runs, about 2 of the 16 in the rest on the kinect2 and TUM frames).
     constexpr int lanes = 16;
     if (y >= 1 && y + 1 < h) {
       const std::uint16_t *up = &px.in(0, y - 1), *down = &px.in(0, y + 1);
@@ -135,8 +137,6 @@ struct grow_front_kernel {
         for (int l = 0; l < lanes; ++l) open |= can_take(x + l);
         for (int l = 0; l < lanes; ++l) o[x + l] = mid[x + l];
         if (!open) continue;
-        // only the pixels that can take a label are evaluated (about 2 of the 16 in an open run
-        // on the kinect2 and TUM frames); the others keep their input, as grow_kernel leaves them
         unsigned need = 0;
         for (int l = 0; l < lanes; ++l) need |= can_take(x + l) << l;
         for (; need != 0; need &= need - 1) {
