@@ -77,9 +77,9 @@ struct grow_kernel {
 /// its pixels that the previous round labelled; then out(x, y) != 0 marks a pixel this round
 /// already labelled or one labelled before, and a pixel is listed once.  The first round
 /// (`first`) gives every pixel grow_kernel's answer (evaluating only the pixels that can take a
-/// label) and writes whole rows.  A row writes only its own pixels and
-/// list, and reads the previous round's buffer and lists: race-free, and the result after every
-/// round is grow_kernel's over all pixels.
+/// label) and writes whole rows.  A row writes only its own pixels and list, and reads the
+/// previous round's buffer and lists: race-free, and the result after every round is
+/// grow_kernel's over all pixels.
 struct grow_front_kernel {
   grow_kernel px;
   const std::int32_t* n_prev;
@@ -137,6 +137,8 @@ struct grow_front_kernel {
         for (int l = 0; l < lanes; ++l) open |= can_take(x + l);
         for (int l = 0; l < lanes; ++l) o[x + l] = mid[x + l];
         if (!open) continue;
+        // the lane mask only for runs that have one (the OR above vectorizes; packing the lanes'
+        // bits does not, and most runs have none)
         unsigned need = 0;
         for (int l = 0; l < lanes; ++l) need |= can_take(x + l) << l;
         for (; need != 0; need &= need - 1) {
