@@ -619,8 +619,9 @@ struct all_edges_rows_kernel {
   }
 
   // One inner point (neighbour q) of arms_within's arms: the largest num so far, and ok cleared
-  // where the point lies surely beyond.  (A member, not a lambda in arms_within: with the lambda,
-  // g++ 12 made the edge pass's x86-64-v4 kernel a quarter more instructions.)
+  // where the point lies surely beyond.  (A member with the arrays as arguments: as a lambda in
+  // arms_within, g++ 12 made the edge pass's x86-64-v4 kernel a quarter more instructions, and
+  // with the arrays in a struct it kept that struct on the stack, a larger frame.)
   EDGEPLANE_HD EDGEPLANE_INLINE static void arm_point(const lane_points& c, std::ptrdiff_t step, int q, const float* cx,
                                                       const float* cy, const float* cz, const float* ax,
                                                       const float* ay, const float* az, const float* hi, float* top,

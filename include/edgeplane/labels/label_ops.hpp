@@ -93,14 +93,18 @@ struct grow_front_kernel {
     std::int32_t m = 0;
     std::uint16_t* o = &px.out(0, y);
     const std::uint16_t* mid = &px.in(0, y);
+    // grow_kernel at x, listing the pixel when it took a label (grow_kernel writes out(x, y) either
+    // way: the input's label, or a new one where the input had none)
+    const auto evaluate = [&](int x) {
+      px(x, y);
+      if (o[x] != mid[x]) list[m++] = x;
+    };
     if (!first) {
       const std::int32_t* own = xs_prev + static_cast<std::int64_t>(y) * w;
       const std::int32_t n_own = n_prev[y + 1];
       for (std::int32_t i = 0; i < n_own; ++i) o[own[i]] = mid[own[i]];
       auto visit = [&](int x) {
-        if (o[x] != 0) return;  // labelled before, or by this round already
-        px(x, y);
-        if (o[x] != 0) list[m++] = x;
+        if (o[x] == 0) evaluate(x);  // (else labelled before, or by this round already)
       };
       for (int v = y - 1; v <= y + 1; v += 2) {
         if (v < 0 || v >= h) continue;
@@ -126,8 +130,7 @@ struct grow_front_kernel {
       const std::uint16_t *up = &px.in(0, y - 1), *down = &px.in(0, y + 1);
       const float* z = &px.depth(0, y);
       x = 1;
-      px(0, y);
-      if (o[0] != mid[0]) list[m++] = 0;
+      evaluate(0);
       // pixel i of the row is unlabelled, valid and has a labelled 4-neighbour (0 or 1)
       const auto can_take = [&](int i) {
         return static_cast<unsigned>((mid[i] == 0) & (z[i] > 0.f) & ((up[i] | down[i] | mid[i - 1] | mid[i + 1]) != 0));
@@ -141,18 +144,11 @@ struct grow_front_kernel {
         // bits does not, and most runs have none)
         unsigned need = 0;
         for (int l = 0; l < lanes; ++l) need |= can_take(x + l) << l;
-        for (; need != 0; need &= need - 1) {
-          const int i = x + lowest_bit(need);
-          px(i, y);
-          if (o[i] != 0) list[m++] = i;
-        }
+        for (; need != 0; need &= need - 1) evaluate(x + lowest_bit(need));
       }
     }
 #endif
-    for (; x < w; ++x) {
-      px(x, y);
-      if (o[x] != mid[x]) list[m++] = x;
-    }
+    for (; x < w; ++x) evaluate(x);
     n_cur[y + 1] = m;
   }
 };
