@@ -18,14 +18,9 @@
 #include <pcl/segmentation/organized_multi_plane_segmentation.h>
 
 #include "edgeplane/camera.hpp"
+#include "peer_common.hpp"
 
 namespace edgeplane_peer {
-
-struct pcl_plane {
-  std::uint16_t id;  // its value in the label image
-  double n[3];       // unit normal, n . X + d = 0 with d >= 0 (camera frame, metres)
-  double d;
-};
 
 /// PCL's settings.  The defaults are its demo's; EDGEPLANE_PCL_CONFIG (for example
 /// "covariance=1,smoothing=20,angular_deg=5,distance=0.03,min_inliers=300,depth_change=0.02")
@@ -37,23 +32,14 @@ struct pcl_config {
   double angular_deg = 3.0, distance = 0.02;
   static pcl_config from_env() {
     pcl_config c;
-    const char* env = std::getenv("EDGEPLANE_PCL_CONFIG");
-    std::string s = env ? env : "";
-    std::size_t pos = 0;
-    while (pos < s.size()) {
-      const std::size_t end = std::min(s.find(',', pos), s.size()), eq = s.find('=', pos);
-      if (eq < end) {
-        const std::string k = s.substr(pos, eq - pos);
-        const double v = std::atof(s.substr(eq + 1, end - eq - 1).c_str());
-        if (k == "covariance") c.covariance = v != 0;
-        if (k == "depth_change") c.depth_change = static_cast<float>(v);
-        if (k == "smoothing") c.smoothing = static_cast<float>(v);
-        if (k == "min_inliers") c.min_inliers = static_cast<unsigned>(v);
-        if (k == "angular_deg") c.angular_deg = v;
-        if (k == "distance") c.distance = v;
-      }
-      pos = end + 1;
-    }
+    for_each_setting("EDGEPLANE_PCL_CONFIG", [&](const std::string& k, double v) {
+      if (k == "covariance") c.covariance = v != 0;
+      if (k == "depth_change") c.depth_change = static_cast<float>(v);
+      if (k == "smoothing") c.smoothing = static_cast<float>(v);
+      if (k == "min_inliers") c.min_inliers = static_cast<unsigned>(v);
+      if (k == "angular_deg") c.angular_deg = v;
+      if (k == "distance") c.distance = v;
+    });
     return c;
   }
 };
@@ -73,7 +59,7 @@ class pcl_segmenter {
   /// number of planes.  With `labels` (row pitch `lpitch`), plane j's inliers get label j + 1 and 0
   /// elsewhere, and `planes` receives the equations.
   std::size_t run(const std::uint16_t* depth, int w, int h, std::ptrdiff_t pitch, float scale, const edgeplane::intrinsics& k,
-                  std::uint16_t* labels = nullptr, std::ptrdiff_t lpitch = 0, std::vector<pcl_plane>* planes = nullptr) {
+                  std::uint16_t* labels = nullptr, std::ptrdiff_t lpitch = 0, std::vector<peer_plane>* planes = nullptr) {
     cloud_->width = static_cast<std::uint32_t>(w);
     cloud_->height = static_cast<std::uint32_t>(h);
     cloud_->is_dense = false;

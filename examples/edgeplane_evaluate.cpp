@@ -43,6 +43,11 @@
 
 #include "pcl_peer.hpp"  // benchmarks/: the PCL peer (edgeplane_evaluate_pcl, built when PCL is found)
 #endif
+#ifdef EDGEPLANE_WITH_CAPE
+#include <chrono>
+
+#include "cape_peer.hpp"  // benchmarks/: the CAPE peer (edgeplane_evaluate_cape, built with EDGEPLANE_CAPE_DIR)
+#endif
 
 namespace {
 
@@ -186,6 +191,9 @@ std::vector<std::string> compiled_backends() {
 #endif
 #ifdef EDGEPLANE_WITH_PCL
   b.push_back("pcl");  // the peer, PCL's organized multi-plane segmentation (presets do not apply)
+#endif
+#ifdef EDGEPLANE_WITH_CAPE
+  b.push_back("cape");  // the peer CAPE (Proenca and Gao 2018), planes only (presets do not apply)
 #endif
   return b;
 }
@@ -816,18 +824,20 @@ int run_backend(const options& o, const edgeplane::params& params, const dataset
   });
 }
 
-#ifdef EDGEPLANE_WITH_PCL
-/// The peer: PCL's OrganizedMultiPlaneSegmentation with IntegralImageNormalEstimation, in the
-/// configuration of PCL's organized segmentation demo (see benchmarks/bench_pcl.cpp).  Plane j of
-/// its result labels its inlier pixels j + 1; its model coefficients give the plane equation.
-int run_pcl(const options& o, const dataset& ds) {
-  edgeplane_peer::pcl_segmenter pcl_seg;
+#if defined(EDGEPLANE_WITH_PCL) || defined(EDGEPLANE_WITH_CAPE)
+/// A peer (benchmarks/pcl_peer.hpp: PCL's OrganizedMultiPlaneSegmentation with
+/// IntegralImageNormalEstimation, in its organized segmentation demo's configuration;
+/// benchmarks/cape_peer.hpp: CAPE in run_cape_offline's, planes only) through the same scoring.
+/// Its plane j labels the pixels it gives that plane j; its plane equations are its own fits.
+template <class Peer>
+int run_peer(const options& o, const dataset& ds) {
+  Peer peer;
   return run_with(o, ds, [&](const cv::Mat& depth, float scale, const edgeplane::intrinsics& k, cv::Mat& labels,
                              std::vector<em::plane_equation>& planes) {
     const auto t0 = std::chrono::steady_clock::now();
-    std::vector<edgeplane_peer::pcl_plane> found;
-    pcl_seg.run(depth.ptr<std::uint16_t>(), depth.cols, depth.rows, static_cast<std::ptrdiff_t>(depth.step1()), scale,
-                k, labels.ptr<std::uint16_t>(), static_cast<std::ptrdiff_t>(labels.step1()), &found);
+    std::vector<edgeplane_peer::peer_plane> found;
+    peer.run(depth.ptr<std::uint16_t>(), depth.cols, depth.rows, static_cast<std::ptrdiff_t>(depth.step1()), scale, k,
+             labels.ptr<std::uint16_t>(), static_cast<std::ptrdiff_t>(labels.step1()), &found);
     for (const auto& p : found) planes.push_back({p.id, {p.n[0], p.n[1], p.n[2]}, p.d});
     return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   });
@@ -843,7 +853,10 @@ int run(const options& o) {
   const dataset ds = scan_dataset(o);
   if (o.backend == "cpu") return run_backend(o, params, ds, edgeplane::cpu{});
 #ifdef EDGEPLANE_WITH_PCL
-  if (o.backend == "pcl") return run_pcl(o, ds);
+  if (o.backend == "pcl") return run_peer<edgeplane_peer::pcl_segmenter>(o, ds);
+#endif
+#ifdef EDGEPLANE_WITH_CAPE
+  if (o.backend == "cape") return run_peer<edgeplane_peer::cape_segmenter>(o, ds);
 #endif
 #ifdef EDGEPLANE_WITH_CUDA
   if (o.backend == "cuda") return run_backend(o, params, ds, edgeplane::cuda{});
