@@ -17,7 +17,6 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
-#include <cstdlib>
 #include <memory>
 #include <string>
 #include <vector>
@@ -82,7 +81,7 @@ class cape_segmenter {
         }
       }
     }
-    seg_.setTo(0);
+    seg_.setTo(0);  // CAPE writes only the pixels it assigns (run_cape_offline makes a new image per frame)
     found_.clear();
     cylinders_.clear();
     int nr_planes = 0, nr_cylinders = 0;
