@@ -95,14 +95,9 @@ class cape_segmenter {
     }
     if (planes) {
       planes->clear();
-      for (std::size_t j = 0; j < found_.size(); ++j) {
+      for (std::size_t j = 0; j < found_.size(); ++j) {  // (CAPE's d is in millimetres)
         const PlaneSeg& p = found_[j];
-        const double len = std::sqrt(p.normal[0] * p.normal[0] + p.normal[1] * p.normal[1] + p.normal[2] * p.normal[2]);
-        if (!(len > 0)) continue;
-        double s = 1.0 / len;
-        if (p.d * s < 0) s = -s;
-        planes->push_back({static_cast<std::uint16_t>(j + 1), {p.normal[0] * s, p.normal[1] * s, p.normal[2] * s},
-                           p.d * s / 1000.0});
+        push_plane(*planes, static_cast<std::uint16_t>(j + 1), p.normal[0], p.normal[1], p.normal[2], p.d / 1000.0);
       }
     }
     return found_.size();

@@ -96,12 +96,7 @@ class pcl_segmenter {
       planes->clear();
       for (std::size_t j = 0; j < coefficients_.size() && j < 65535; ++j) {
         const auto& c = coefficients_[j].values;
-        if (c.size() < 4) continue;
-        const double len = std::sqrt(double(c[0]) * c[0] + double(c[1]) * c[1] + double(c[2]) * c[2]);
-        if (!(len > 0)) continue;
-        double s = 1.0 / len;
-        if (c[3] * s < 0) s = -s;
-        planes->push_back({static_cast<std::uint16_t>(j + 1), {c[0] * s, c[1] * s, c[2] * s}, c[3] * s});
+        if (c.size() >= 4) push_plane(*planes, static_cast<std::uint16_t>(j + 1), c[0], c[1], c[2], c[3]);
       }
     }
     return inliers_.size();

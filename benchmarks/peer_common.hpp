@@ -1,11 +1,13 @@
 // What the peer segmenters used by the comparisons share (pcl_peer.hpp, cape_peer.hpp): the plane
-// each reports, and the parsing of the environment variable that overrides a peer's settings.
+// each reports (in the camera frame, unit normal, d >= 0), and the parsing of the environment variable that overrides a peer's settings.
 #pragma once
 #include <algorithm>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
 #include <string>
+#include <vector>
 
 namespace edgeplane_peer {
 
@@ -14,6 +16,16 @@ struct peer_plane {
   double n[3];       // unit normal, n . X + d = 0 with d >= 0 (camera frame, metres)
   double d;
 };
+
+/// Appends plane `id` with the equation nx X + ny Y + nz Z + d = 0 (d in metres) scaled to a
+/// unit normal with d >= 0; a zero (or NaN) normal is left out.
+inline void push_plane(std::vector<peer_plane>& planes, std::uint16_t id, double nx, double ny, double nz, double d) {
+  const double len = std::sqrt(nx * nx + ny * ny + nz * nz);
+  if (!(len > 0)) return;
+  double s = 1.0 / len;
+  if (d * s < 0) s = -s;
+  planes.push_back({id, {nx * s, ny * s, nz * s}, d * s});
+}
 
 /// Calls set(key, value) for each "key=value" of the comma-separated list in environment variable
 /// `name` (values read with atof; entries without '=' are ignored).

@@ -45,28 +45,46 @@ inline double median(std::vector<double> v) {
   return v.empty() ? 0.0 : v[v.size() / 2];
 }
 
+/// edgeplane set up on a frame, warmed up by one segmentation: run() segments it again.
+struct edgeplane_on_frame {
+  segmenter<cpu> seg;
+  std::vector<std::uint16_t> labels;
+  segmentation_result res;
+  image_view<const std::uint16_t> depth;
+  image_view<std::uint16_t> out;
+  float scale;
+  intrinsics k;
+  edgeplane_on_frame(const depth_frame& f, cpu backend, const params& preset)
+      : seg(preset, backend),
+        labels(f.depth.size()),
+        depth(make_view(f.depth.data(), f.w, f.h)),
+        out(make_view(labels.data(), f.w, f.h)),
+        scale(f.scale),
+        k(f.k) {
+    run();
+  }
+  void run() {
+    seg.segment(depth, scale, k, out, res);
+    benchmark::DoNotOptimize(labels.data());
+  }
+};
+
 /// One benchmark of `Peer` (a default-constructible class with PCL's and CAPE's peers' `run`)
 /// against edgeplane; counters `<peer>_ms`, `edgeplane_ms`, `<peer>_over_edgeplane` and both plane
 /// counts.
 template <class Peer>
 void ratio(benchmark::State& st, const std::string& peer, depth_frame f, cpu backend, const params& preset) {
   Peer peer_seg;
-  segmenter<cpu> seg(preset, backend);
-  std::vector<std::uint16_t> labels(f.depth.size());
-  segmentation_result res;
-  const auto depth = make_view(static_cast<const std::uint16_t*>(f.depth.data()), f.w, f.h);
-  const auto out = make_view(labels.data(), f.w, f.h);
-  std::size_t peer_planes = peer_seg.run(f.depth.data(), f.w, f.h, f.w, f.scale, f.k);  // warm-up of both
-  seg.segment(depth, f.scale, f.k, out, res);
+  edgeplane_on_frame ep(f, backend, preset);
+  std::size_t peer_planes = peer_seg.run(f.depth.data(), f.w, f.h, f.w, f.scale, f.k);  // warm-up
   std::vector<double> t_peer, t_ep;
   using clock = std::chrono::steady_clock;
   for (auto _ : st) {
     const auto t0 = clock::now();
     peer_planes = peer_seg.run(f.depth.data(), f.w, f.h, f.w, f.scale, f.k);
     const auto t1 = clock::now();
-    seg.segment(depth, f.scale, f.k, out, res);
+    ep.run();
     const auto t2 = clock::now();
-    benchmark::DoNotOptimize(labels.data());
     t_peer.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());
     t_ep.push_back(std::chrono::duration<double, std::milli>(t2 - t1).count());
     st.SetIterationTime(std::chrono::duration<double>(t2 - t0).count());
@@ -76,7 +94,7 @@ void ratio(benchmark::State& st, const std::string& peer, depth_frame f, cpu bac
   st.counters["edgeplane_ms"] = me;
   st.counters[peer + "_over_edgeplane"] = me > 0 ? mp / me : 0.0;
   st.counters[peer + "_planes"] = static_cast<double>(peer_planes);
-  st.counters["edgeplane_planes"] = static_cast<double>(res.planes.size());
+  st.counters["edgeplane_planes"] = static_cast<double>(ep.res.planes.size());
 }
 
 /// One segmenter alone on a frame, warm (no other segmenter between its frames): `solo` rows.
@@ -90,17 +108,9 @@ void solo_peer(benchmark::State& st, depth_frame f) {
   st.counters["planes"] = static_cast<double>(planes);
 }
 inline void solo_edgeplane(benchmark::State& st, depth_frame f, cpu backend, const params& preset) {
-  segmenter<cpu> seg(preset, backend);
-  std::vector<std::uint16_t> labels(f.depth.size());
-  segmentation_result res;
-  const auto depth = make_view(static_cast<const std::uint16_t*>(f.depth.data()), f.w, f.h);
-  const auto out = make_view(labels.data(), f.w, f.h);
-  seg.segment(depth, f.scale, f.k, out, res);
-  for (auto _ : st) {
-    seg.segment(depth, f.scale, f.k, out, res);
-    benchmark::DoNotOptimize(labels.data());
-  }
-  st.counters["planes"] = static_cast<double>(res.planes.size());
+  edgeplane_on_frame ep(f, backend, preset);
+  for (auto _ : st) ep.run();
+  st.counters["planes"] = static_cast<double>(ep.res.planes.size());
 }
 
 /// Registers ratio<Peer> as `ratio/<frame>/<edgeplane configuration>`, and each segmenter alone
