@@ -850,10 +850,13 @@ class segmenter {
       b_.copy_to_host(region_origin_.data(), origin_.data(), region_origin_.size() * sizeof(std::uint16_t));
       num_planes = regions;
     }
+    // Upsampled labels are the final ones: where the caller's label image is in the backend's
+    // memory, the upsampling writes them there (no copy), as the closing does above.
     image_view<std::uint16_t> final_labels = la;
+    const bool labels_there = closed_out || (down && (Backend::host_accessible || on_backend));
     if (down) {
-      lab_full_.resize(n_full);
-      final_labels = view(lab_full_.data(), w, h);
+      if (!labels_there) lab_full_.resize(n_full);
+      final_labels = labels_there ? labels_out : view(lab_full_.data(), w, h);
       upsample_labels(b_, image_view<const std::uint16_t>(la), final_labels);
     }
     // final statistics at output resolution: counts, centroids and boxes, which need only the
@@ -887,7 +890,7 @@ class segmenter {
       else
         b_.copy_to_host(to, from, bytes);
     };
-    if (!closed_out) {  // (else the labels are there already)
+    if (!labels_there) {
       if (labels_out.pitch == w)  // dense: one copy
         copy_out(labels_out.data, final_labels.data, sizeof(std::uint16_t) * n_full);
       else

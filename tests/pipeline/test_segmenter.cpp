@@ -306,16 +306,14 @@ TEST_CASE("segmenter: degenerate data gives a well-defined empty result") {
   }
 }
 
-TEST_CASE("segmenter: the closing's labels written into the caller's image: pitched, in the depth's own buffer") {
-  // thesis_full closes the labels and neither splits regions nor downscales, so on the CPU the
-  // closing writes the final labels into the caller's image and the plane statistics read them there.
+namespace {
+// The final labels written straight into the caller's image on the CPU (by the closing, or by the
+// upsampling of a downscaled frame's labels), the plane statistics read there: checked against
+// the device path, whose labels go through its own buffer.
+void check_labels_in_callers_image(const params& p) {
   const auto s = test::room_with_box();
   const rendered r = test::render(s, test::look_at({0.1, -1.2, 1.3}, {2.6, 0.8, 0.4}), 160, 128,
                                   test::kinect2_intrinsics(160, 128), {0.001, 0.0005, 0.01, 41ull});
-  const params p = presets::thesis_full();
-  REQUIRE(p.label_closing_radius > 0);
-  REQUIRE(!p.split_regions);
-  REQUIRE(!p.downscale);
   const std::vector<std::uint16_t> mm = r.depth_mm();
   const int w = r.width, h = r.height;
   // Reference: the device path (support/device_model.hpp: host memory that the segmenter treats
@@ -369,6 +367,23 @@ TEST_CASE("segmenter: the closing's labels written into the caller's image: pitc
     CHECK(std::all_of(second.begin(), second.end(), [](std::uint16_t v) { return v == 0; }));
     CHECK(first == want);  // the first frame's image is not written again
   }
+}
+}  // namespace
+
+TEST_CASE("segmenter: the closing's labels written into the caller's image: pitched, in the depth's own buffer") {
+  // thesis_full closes the labels and neither splits regions nor downscales: the closing writes
+  // the final labels.
+  const params p = presets::thesis_full();
+  REQUIRE(p.label_closing_radius > 0);
+  REQUIRE(!p.split_regions);
+  REQUIRE(!p.downscale);
+  check_labels_in_callers_image(p);
+}
+
+TEST_CASE("segmenter: the upsampled labels written into the caller's image: pitched, in the depth's own buffer") {
+  const params p = presets::thesis_half();  // downscaled: the upsampling writes the final labels
+  REQUIRE(p.downscale);
+  check_labels_in_callers_image(p);
 }
 
 TEST_CASE("segmenter: segment_on_backend and segment_batch give what segment gives") {
