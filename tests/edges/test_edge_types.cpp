@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -272,6 +273,63 @@ TEST_CASE_TEMPLATE("curved: a flat region joining a circular arc is a curved edg
       check_profile<D>(b, plane, cu, [](int, int) { return 0; });
     }
   });
+}
+
+TEST_CASE("curved: where t_cue1 <= t_cue2 an arc-like side is never straight (arc_excludes_straight), and only there") {
+  // The curved test skips the bent side's own arm scan when arc_excludes_straight(): random
+  // one-row profiles (each side a line, a parabola or a kink, plus noise), every side checked.
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> u(-1.f, 1.f);
+  const detail::projector proj{1.f / 365.f, 1.f / 365.f, 20.f, 0.f};
+  struct thresholds {
+    float t_straight, t_bend;
+  };
+  for (int n : {1, 2, 5, 8}) {
+    CAPTURE(n);
+    const int w = 2 * n + 1;
+    std::vector<float> row(static_cast<std::size_t>(w));
+    for (thresholds t : {thresholds{0.02f, 0.08f}, thresholds{0.08f, 0.08f}, thresholds{0.3f, 0.08f}}) {
+      CAPTURE(t.t_straight);
+      for (float noise_k : {0.f, 0.5f}) {
+        const edge_type::curved cu{t.t_straight, t.t_bend, noise_k, n, detail::noise_sigma{0.0005f, 0.0002f}};
+        CHECK(cu.arc_excludes_straight() == (n >= 2 && t.t_straight <= t.t_bend));
+        int arcs = 0, arcs_straight = 0;
+        for (int trial = 0; trial < 3000; ++trial) {
+          // depths 2-3 m, slopes up to 45 degrees; each side a circular arc bending either way
+          // (radius 1-3 arm lengths) or a kink; noise up to 0.3 mm
+          const float z0 = 2.5f + 0.5f * u(rng), p = z0 / 365.f, slope = u(rng), noise = 0.00015f * (u(rng) + 1.f);
+          float radius[2], sign[2], kink[2];
+          for (int side = 0; side < 2; ++side) {
+            radius[side] = static_cast<float>(n) * p * (2.f + u(rng));
+            sign[side] = u(rng) > 0.f ? 1.f : -1.f;
+            kink[side] = u(rng) > 0.5f ? u(rng) : 0.f;  // slope change of a kink (0: an arc)
+          }
+          for (int k = -n; k <= n; ++k) {
+            const int side = k < 0 ? 0 : 1;
+            const float x = static_cast<float>(k) * p, r = radius[side];
+            const float shape = kink[side] != 0.f ? kink[side] * std::fabs(x) : sign[side] * (r - std::sqrt(r * r - x * x));
+            row[static_cast<std::size_t>(k + n)] = z0 + slope * x + shape + noise * u(rng);
+          }
+          detail::neighbourhood nb;
+          detail::gather_along<direction::horizontal>(nb, image_view<const float>{row.data(), w, 1, w}, proj, n, 0, n);
+          REQUIRE(nb.nl == n);
+          REQUIRE(nb.nr == n);
+          const float nz = cu.noise_k * cu.sigma(nb.zc);
+          for (int s = -1; s <= 1; s += 2) {
+            if (!cu.arc_like(nb, s, nz)) continue;
+            ++arcs;
+            arcs_straight += cu.straight(nb, s, nz) ? 1 : 0;
+          }
+        }
+        if (n < 2) continue;  // (an arm of one neighbour has no inner point: arc-like nowhere)
+        CHECK(arcs > 100);
+        if (cu.arc_excludes_straight())
+          CHECK(arcs_straight == 0);
+        else
+          CHECK(arcs_straight > 0);  // a looser straight limit admits arc-like sides: the scan is needed
+      }
+    }
+  }
 }
 
 TEST_CASE_TEMPLATE("a flat plane with 1 mm noise has no edge of any type with presets::thesis_full()", B,

@@ -810,10 +810,16 @@ struct all_edges_rows_kernel {
           arcs_exact(c, step, sg, n, q1, mid, q3, cu.t_bend, noise_cu, maybe, 4 * D + 3, arc[side]);
         for (int l = 0; l < Lanes; ++l) open |= arc[side][l];
       }
-      if (open) {  // straight(nb, side) where either side is arc-like
+      if (open) {  // straight(nb, side) where the other side is arc-like (and this side, unless
+                   // an arc-like side is surely not straight: curved::arc_excludes_straight)
+        const bool excl = cu.arc_excludes_straight();
         for (int side = 0; side < 2; ++side) {
-          for (int l = 0; l < Lanes; ++l) straight[side][l] = arc[0][l] | arc[1][l];
-          arms_within(c, step, side == 0 ? -1 : 1, n, cu.t_straight, noise_cu, straight[side]);
+          unsigned scan = 0;
+          for (int l = 0; l < Lanes; ++l) {
+            straight[side][l] = excl ? arc[1 - side][l] & (arc[side][l] ^ 1u) : arc[0][l] | arc[1][l];
+            scan |= straight[side][l];
+          }
+          if (scan) arms_within(c, step, side == 0 ? -1 : 1, n, cu.t_straight, noise_cu, straight[side]);
         }
         for (int l = 0; l < Lanes; ++l) {
           const unsigned fire = (arc[0][l] & straight[1][l] & (straight[0][l] ^ 1u)) |

@@ -107,13 +107,20 @@ struct curved {
   EDGEPLANE_HD EDGEPLANE_INLINE bool straight(const detail::neighbourhood& nb, int s, float noise) const {
     return detail::arm_within(nb, s, n, t_straight, noise);
   }
+  /// An arc-like side is then never straight, so its own arm need not be scanned: its midpoint
+  /// (an inner point of the arm where n >= 2) lies beyond t_bend * chord + noise of the chord,
+  /// and so beyond t_straight * chord + noise where t_straight <= t_bend, by the same float
+  /// operations (farther_than's distance is dist2_to_line's, its chord norm's; a product with a
+  /// non-negative chord and a sum round monotonically).  Every preset has t_cue1 < t_cue2.
+  EDGEPLANE_HD bool arc_excludes_straight() const { return n >= 2 && t_straight <= t_bend; }
   // Exactly one arm straight and the other arc-like: at most one side can be the bent one, so test
   // each side's cheap arc shape (3 distances) first and scan the arms only where it holds.
   EDGEPLANE_HD EDGEPLANE_INLINE bool operator()(const detail::neighbourhood& nb) const {
     if (nb.nl < n || nb.nr < n) return false;
     const float noise = noise_k * sigma(nb.zc);
     for (int s = -1; s <= 1; s += 2)
-      if (arc_like(nb, s, noise) && straight(nb, -s, noise) && !straight(nb, s, noise)) return true;
+      if (arc_like(nb, s, noise) && straight(nb, -s, noise) && (arc_excludes_straight() || !straight(nb, s, noise)))
+        return true;
     return false;
   }
 };
