@@ -277,7 +277,8 @@ TEST_CASE_TEMPLATE("curved: a flat region joining a circular arc is a curved edg
 
 TEST_CASE("curved: where t_cue1 <= t_cue2 an arc-like side is never straight (arc_excludes_straight), and only there") {
   // The curved test skips the bent side's own arm scan when arc_excludes_straight(): random
-  // one-row profiles (each side a line, a parabola or a kink, plus noise), every side checked.
+  // one-row profiles (each side a circular arc or a kink on a slanted line, plus noise), every
+  // side checked.
   std::mt19937 rng(7);
   std::uniform_real_distribution<float> u(-1.f, 1.f);
   const detail::projector proj{1.f / 365.f, 1.f / 365.f, 20.f, 0.f};

@@ -107,9 +107,9 @@ struct curved {
   EDGEPLANE_HD EDGEPLANE_INLINE bool straight(const detail::neighbourhood& nb, int s, float noise) const {
     return detail::arm_within(nb, s, n, t_straight, noise);
   }
-  /// An arc-like side is then never straight, so its own arm need not be scanned: its midpoint
-  /// (an inner point of the arm where n >= 2) lies beyond t_bend * chord + noise of the chord,
-  /// and so beyond t_straight * chord + noise where t_straight <= t_bend, by the same float
+  /// Whether an arc-like side is never straight, so that its own arm need not be scanned: its
+  /// midpoint (an inner point of the arm where n >= 2) lies beyond t_bend * chord + noise of the
+  /// chord, and so beyond t_straight * chord + noise where t_straight <= t_bend, by the same float
   /// operations (farther_than's distance is dist2_to_line's, its chord norm's; a product with a
   /// non-negative chord and a sum round monotonically).  Every preset has t_cue1 < t_cue2.
   EDGEPLANE_HD bool arc_excludes_straight() const { return n >= 2 && t_straight <= t_bend; }
