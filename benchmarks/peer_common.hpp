@@ -1,5 +1,6 @@
 // What the peer segmenters used by the comparisons share (pcl_peer.hpp, cape_peer.hpp): the plane
-// each reports (in the camera frame, unit normal, d >= 0), and the parsing of the environment variable that overrides a peer's settings.
+// each reports (in the camera frame, unit normal, d >= 0), and the parsing of the environment
+// variable that overrides a peer's settings.
 #pragma once
 #include <algorithm>
 #include <cmath>
@@ -19,7 +20,8 @@ struct peer_plane {
 
 /// Appends plane `id` with the equation nx X + ny Y + nz Z + d = 0 (d in metres) scaled to a
 /// unit normal with d >= 0; a zero (or NaN) normal is left out.
-inline void push_plane(std::vector<peer_plane>& planes, std::uint16_t id, double nx, double ny, double nz, double d) {
+inline void push_plane(std::vector<peer_plane>& planes, std::uint16_t id, double nx, double ny, double nz,
+                       double d) {
   const double len = std::sqrt(nx * nx + ny * ny + nz * nz);
   if (!(len > 0)) return;
   double s = 1.0 / len;
