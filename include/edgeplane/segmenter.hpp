@@ -170,6 +170,16 @@ struct write_members_kernel {
     if (r >= 0 && flags[r]) cand(x, y) = offset + scan[r];
   }
 };
+/// write_members_kernel on host backends, one work item per row of its rectangle, over the
+/// row's span of eroded pixels (eroded_rows_kernel's eroded_spans), the only ones of kept pieces.
+struct write_members_rows {
+  write_members_kernel k;
+  const std::int32_t* spans;
+  void operator()(std::int64_t row) const {
+    const int y = static_cast<int>(row);
+    for (int x = spans[2 * y]; x < spans[2 * y + 1]; ++x) k(x, y);
+  }
+};
 /// Labels from a candidate-id image through a table (host backends' sums of a split round's
 /// pieces): pixel (x, y) gets table[cand(x, y)] (ids 0 .. the table's last).  No lanes<L> of its
 /// own: moments_kernel's per-lane fallback is the same gather.  (Looking the id up once where 8
@@ -178,7 +188,16 @@ struct write_members_kernel {
 struct candidate_table_labels {
   image_view<const std::int32_t> cand;
   const std::int32_t* table;
+  /// When not null: the labels of row y lie in columns [spans[2 (y - row0)], spans[2 (y - row0) + 1])
+  /// (the host moments read only those: has_column_spans).
+  const std::int32_t* spans = nullptr;
+  int row0 = 0;
   EDGEPLANE_HD std::int32_t operator()(int x, int y) const { return table[cand(x, y)]; }
+  EDGEPLANE_HD void columns(int y, int& x0, int& x1) const {
+    if (!spans) return;
+    x0 = spans[2 * (y - row0)];
+    x1 = spans[2 * (y - row0) + 1];
+  }
 };
 /// The rectangle [x0, x1] x [y0, y1] of view v as a view of its own (same pitch).
 template <class T>
@@ -330,9 +349,10 @@ class segmenter {
   // they have at least min_size elements and numbered 1, 2, ... in raster order of the roots
   // (scan_); returns how many.  Host backends leave the union-find's flattening to the counting
   // pass of flag_components.
+  // (spans: host backends, the rows' column spans of the active elements, unite_components')
   template <class Active, class Adjacency>
   std::int32_t components(std::int64_t n, Active active, std::int64_t work_items, Adjacency adj,
-                          std::int32_t min_size) {
+                          std::int32_t min_size, const std::int32_t* spans = nullptr) {
     if constexpr (Backend::host_accessible) {
       std::uint16_t* right_bits = nullptr;  // the row pass's right joins, for the vertical unions
       if constexpr (detail::has_join_lanes<Adjacency>) {
@@ -341,7 +361,7 @@ class segmenter {
       }
       // the row pass zeroes the counts of the elements that can be roots, if it runs by rows
       const bool zeroed = detail::unite_components(b_, n, active, work_items, adj, parent_.data(), right_bits,
-                                                   count_.data());
+                                                   count_.data(), spans);
       return flag_components(n, min_size, zeroed);
     } else {
       connected_components(b_, n, active, work_items, adj, parent_.data());
@@ -425,7 +445,8 @@ class segmenter {
 
   // Host backends: the moment blocks, boxes and fits of a split round's pieces, candidates
   // num_cand+1 .. num_cand+added, after their ids are written (split_parents before that), in rows
-  // [y0, y1].  Where a split candidate's largest piece outweighs the pixels of it that no piece took
+  // [y0, y1] and, of row y, columns [refit_spans_[2 (y - y0)], refit_spans_[2 (y - y0) + 1]) (the
+  // failed candidates' pixels).  Where a split candidate's largest piece outweighs the pixels of it that no piece took
   // (its rim and dropped components, which keep its id), that piece is not summed: its sums are
   // the candidate's less those of the rest and of its other pieces (integers: exactly the piece's
   // own sums), so a candidate that loses only its rim costs the sums of its rim.  That piece's box
@@ -459,8 +480,8 @@ class segmenter {
     }
     moments_.resize(static_cast<std::size_t>(labels + 1) * slots);
     bbox_.resize(static_cast<std::size_t>(labels + 1) * 4);
-    accumulate_moments(b_, z, kp, detail::candidate_table_labels{cand, label_table_.data()}, labels, moments_.data(),
-                       bbox_.data(), y0, y1 + 1);
+    accumulate_moments(b_, z, kp, detail::candidate_table_labels{cand, label_table_.data(), refit_spans_.data(), y0},
+                       labels, moments_.data(), bbox_.data(), y0, y1 + 1);
     const std::uint64_t* m = moments_.data();
     const std::int32_t* bb = bbox_.data();
     host_moments_.resize(static_cast<std::size_t>(total + 1) * slots);
@@ -649,20 +670,35 @@ class segmenter {
       const auto cand_r = detail::sub_view(cand, x0, y0, x1, y1);
       const auto z_r = detail::sub_view(image_view<const float>(z), x0, y0, x1, y1);
       const std::int64_t n_r = static_cast<std::int64_t>(cand_r.width) * cand_r.height;
+      // Host backends: the passes after the erosion read each row's span of failed (the refit)
+      // or eroded pixels (the union-find, the ids) only, not the whole rectangle.
+      std::int32_t *failed_spans = nullptr, *eroded_spans = nullptr;
+      if constexpr (Backend::host_accessible) {
+        failed_spans_.resize(2 * static_cast<std::size_t>(cand_r.height));
+        eroded_spans_.resize(2 * static_cast<std::size_t>(cand_r.height));
+        failed_spans = failed_spans_.data();
+        eroded_spans = eroded_spans_.data();
+      }
       erode_failed(b_, image_view<const std::int32_t>(cand_r), failed_.data(), round * p_.split_erode,
-                   view(cov_l_.data(), cand_r.width, cand_r.height));
+                   view(cov_l_.data(), cand_r.width, cand_r.height), failed_spans, eroded_spans);
       const detail::mask_bit_active eroded{cov_l_.data(), 2};
       const std::int32_t added =
           components(n_r, eroded, n_r,
                      detail::grid4_adjacency<detail::mask_bit_active>{z_r, eroded, p_.t_je, p_.t_je_quad, slope_inv_f},
-                     p_.t_size);
-      if constexpr (Backend::host_accessible) split_parents(image_view<const std::int32_t>(cand), x0, y0, x1, added);
-      detail::for_each_pixel(b_, cand_r.width, cand_r.height,
-                             detail::write_members_kernel{parent_.data(), flags_.data(), scan_.data(), num_cand, cand_r});
+                     p_.t_size, eroded_spans);
+      const detail::write_members_kernel members{parent_.data(), flags_.data(), scan_.data(), num_cand, cand_r};
+      if constexpr (Backend::host_accessible) {
+        split_parents(image_view<const std::int32_t>(cand), x0, y0, x1, added);
+        if (added > 0) b_.for_each_index(cand_r.height, detail::write_members_rows{members, eroded_spans});
+      } else {
+        detail::for_each_pixel(b_, cand_r.width, cand_r.height, members);
+      }
       if (added == 0) break;
-      if constexpr (Backend::host_accessible)
+      if constexpr (Backend::host_accessible) {
+        refit_spans_.resize(failed_spans_.size());
+        for (std::size_t i = 0; i < refit_spans_.size(); ++i) refit_spans_[i] = failed_spans_[i] + x0;
         split_refit(z, kp, image_view<const std::int32_t>(cand), y0, y1, num_cand, added);
-      else
+      } else
         refit_candidates(z, kp, num_cand + added, num_cand, y0, y1 + 1);
       num_cand += added;
       for (int c = num_cand - added; c < num_cand; ++c) status_.push_back(is_plane(fits_[c], p_) ? 1 : 0);
@@ -926,6 +962,9 @@ class segmenter {
   std::vector<std::int32_t> block_roots_;  // roots listed per block (host backends' numbering)
   std::vector<std::int32_t> kept_roots_;   // the kept roots in order (host backends' numbering)
   std::vector<std::int32_t> piece_of_, largest_, label_table_;  // split rounds' tables (host backends)
+  // split rounds' row spans (host backends): of the failed and the eroded pixels, in the round's
+  // rectangle; the failed ones in image columns (the refit's)
+  std::vector<std::int32_t> failed_spans_, eroded_spans_, refit_spans_;
   std::vector<std::int64_t> piece_size_, rest_size_;
   std::vector<std::uint16_t> right_bits_;  // host backends' union-find: right joins per block of 16
   std::vector<std::uint16_t> host_table_, region_origin_;

@@ -363,6 +363,36 @@ TEST_CASE_TEMPLATE("erode_failed: the separable erosion marks exactly the pixels
         }
         CHECK(differ == 0);
         CHECK(active > 0);  // not vacuous
+        // host backends' row spans: from each row's first failed pixel to its last, and from its
+        // first marked pixel to its last (w, 0 where none); the marks the same
+        std::vector<std::int32_t> fs(2 * static_cast<std::size_t>(h), -9), es(fs);
+        if constexpr (B::host_accessible) {
+          erode_failed(b, c.cview(w, h), f.data(), r, mask.view(w, h), fs.data(), es.data());
+          CHECK(mask.host() == m);
+          int wrong = 0, empty_eroded = 0;
+          for (int y = 0; y < h; ++y) {
+            int fa = w, fb = 0, ea = w, eb = 0;
+            for (int x = 0; x < w; ++x) {
+              const std::size_t i = static_cast<std::size_t>(y) * w + x;
+              if (failed[static_cast<std::size_t>(cand[i])]) {
+                fa = std::min(fa, x);
+                fb = x + 1;
+              }
+              if (reference(static_cast<std::int64_t>(i))) {
+                ea = std::min(ea, x);
+                eb = x + 1;
+              }
+            }
+            wrong += fs[2 * static_cast<std::size_t>(y)] != fa || fs[2 * static_cast<std::size_t>(y) + 1] != fb;
+            wrong += es[2 * static_cast<std::size_t>(y)] != ea || es[2 * static_cast<std::size_t>(y) + 1] != eb;
+            empty_eroded += eb == 0;
+          }
+          CHECK(wrong == 0);
+          if (r > 0) CHECK(empty_eroded >= 2 * r);  // the rows whose windows leave the image
+        } else {
+          CHECK_THROWS_AS(erode_failed(b, c.cview(w, h), f.data(), r, mask.view(w, h), fs.data(), es.data()),
+                          edgeplane::error);
+        }
       }
       CHECK_THROWS_AS(erode_failed(b, c.cview(w, h), f.data(), -1, mask.view(w, h)), edgeplane::error);
     }
@@ -628,5 +658,62 @@ TEST_CASE_TEMPLATE("erode_failed: on the failed candidates' rectangle it marks w
       CHECK(differ == 0);
       CHECK(marked > 100);  // not vacuous
     }
+  }
+}
+
+TEST_CASE("unite_components: rows' column spans give the row passes' results without them") {
+  // The segmenter's split rounds pass each row's span of eroded pixels: the row passes then read
+  // only from the 16-pixel block of a span's first pixel to its end.  Active pixels lie only in
+  // random spans (empty ones too, starting and ending anywhere in a block, at the row's ends);
+  // given exactly or widened, the spans change nothing: the components, the right joins kept for
+  // the vertical unions, and the root counts zeroed.
+  lcg_noise rng(77);
+  for (const int w : {13, 16, 17, 37, 100, 161, 300}) {
+    CAPTURE(w);
+    const int h = 29;
+    const std::size_t n = static_cast<std::size_t>(w) * h;
+    std::vector<float> depth(n);
+    std::vector<std::uint8_t> mask(n, 0);
+    std::vector<std::int32_t> exact(2 * static_cast<std::size_t>(h)), wide(exact.size());
+    for (int y = 0; y < h; ++y) {
+      int a = static_cast<int>(rng.next_u32(static_cast<std::uint32_t>(w))), b = a + static_cast<int>(rng.next_u32(static_cast<std::uint32_t>(w - a + 1)));
+      if (y % 7 == 3) b = a;  // no active pixel
+      if (y % 5 == 1) a = 0, b = w;
+      int fa = w, fb = 0;
+      for (int x = 0; x < w; ++x) {
+        const std::size_t i = static_cast<std::size_t>(y) * w + x;
+        depth[i] = x > 0 && rng.uniform01() < 0.9 ? depth[i - 1] : 1.f + 0.04f * static_cast<float>(rng.next_u32(4));
+        mask[i] = x >= a && x < b && rng.uniform01() < 0.9 ? 2 : 0;
+        if (mask[i]) fa = std::min(fa, x), fb = x + 1;
+      }
+      exact[2 * static_cast<std::size_t>(y)] = fa;
+      exact[2 * static_cast<std::size_t>(y) + 1] = fb;
+      wide[2 * static_cast<std::size_t>(y)] = static_cast<std::int32_t>(rng.next_u32(static_cast<std::uint32_t>(std::min(fa, fb) + 1)));
+      wide[2 * static_cast<std::size_t>(y) + 1] = fb + static_cast<std::int32_t>(rng.next_u32(static_cast<std::uint32_t>(w - fb + 1)));
+    }
+    const detail::mask_bit_active active{mask.data(), 2};
+    const detail::grid4_adjacency<detail::mask_bit_active> adj{make_view<const float>(depth.data(), w, h), active, 0.06f,
+                                                               0.f, 0.f};
+    const int blocks = detail::join_blocks(w);
+    auto run = [&](const std::int32_t* spans, std::vector<std::int32_t>& parent, std::vector<std::uint16_t>& right,
+                   std::vector<std::int32_t>& counts, cpu::mode m) {
+      parent.assign(n, -7);
+      right.assign(static_cast<std::size_t>(blocks) * h, 0xa5a5);
+      counts.assign(n, 0x5a5a5a5a);
+      detail::unite_components(cpu{m}, static_cast<std::int64_t>(n), active, static_cast<std::int64_t>(n), adj,
+                               parent.data(), right.data(), counts.data(), spans);
+      cpu{m}.for_each_index(static_cast<std::int64_t>(n), detail::uf_flatten_kernel{parent.data()});
+    };
+    std::vector<std::int32_t> p0, c0, p1, c1;
+    std::vector<std::uint16_t> r0, r1;
+    run(nullptr, p0, r0, c0, cpu::mode::serial);
+    REQUIRE(std::count(p0.begin(), p0.end(), -1) > static_cast<std::ptrdiff_t>(n / 5));  // spans cut the rows
+    for (const auto* spans : {&exact, &wide})
+      for (const cpu::mode m : {cpu::mode::serial, cpu::mode::parallel}) {
+        run(spans->data(), p1, r1, c1, m);
+        CHECK(p1 == p0);
+        CHECK(r1 == r0);
+        CHECK(c1 == c0);
+      }
   }
 }

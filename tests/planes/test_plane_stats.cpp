@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "edgeplane/planes/plane_stats.hpp"
+#include "edgeplane/segmenter.hpp"
 #include "support/test_backends.hpp"
 
 using namespace edgeplane;
@@ -608,5 +609,61 @@ TEST_CASE_TEMPLATE("inlier_change_labels: the moments of the pixels that joined 
     // From every candidate pixel of each plane (the candidates' sums: pixels without depth in slot 10).
     auto from_all = corrected(sums(detail::image_labels{op.cview(w, h)}, np), change(true));
     CHECK(std::equal(from_all.begin() + moment_slots, from_all.end(), in_b.begin() + moment_slots));
+  }
+}
+
+TEST_CASE("accumulate_moments: a label source's column spans (has_column_spans) bound the columns read in each row") {
+  // The segmenter's split rounds sum their pieces through candidate_table_labels with each row's
+  // span of failed pixels.  Here the spans are random (empty ones too) and labelled pixels lie
+  // outside them, which must not be read: the sums and boxes are those of the label image cut to
+  // the spans and to the row range, summed without spans.
+  static_assert(detail::has_column_spans<detail::candidate_table_labels>);
+  static_assert(!detail::has_column_spans<detail::candidate_image_labels>);
+  const int w = 157, h = 300, num = 13, y0 = 5, y1 = h - 3;
+  const auto k = camera(w, h);
+  auto depth = plane_image(k, w, h, normalized({0.2, -0.4, -1.0}), 2.6);
+  lcg_noise noise(9);
+  for (auto& z : depth) z += noise(0.003f);
+  std::vector<std::int32_t> cand(depth.size(), 0), table(num + 1);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const std::size_t i = static_cast<std::size_t>(y) * w + x;
+      cand[i] = ((x + 3 * y) / (17 + y % 13) + y) % (num + 1);  // runs of 17..29 pixels
+      if ((x * 7 + y * 3) % 41 == 0) depth[i] = 0.f;
+    }
+  for (int l = 0; l <= num; ++l) table[static_cast<std::size_t>(l)] = l % 4 == 3 ? 0 : l;  // some ids count as none
+  std::vector<std::int32_t> spans(2 * static_cast<std::size_t>(y1 - y0));
+  std::vector<std::int32_t> cut(cand.size(), 0);  // the labels the spans keep
+  int outside = 0;
+  for (int y = y0; y < y1; ++y) {
+    const int a = static_cast<int>(noise.next_u32(w / 2 + 1)), b = (y % 9 == 0) ? a : a + static_cast<int>(noise.next_u32(w - a + 1));
+    spans[2 * static_cast<std::size_t>(y - y0)] = a;
+    spans[2 * static_cast<std::size_t>(y - y0) + 1] = b;
+    for (int x = 0; x < w; ++x) {
+      const std::size_t i = static_cast<std::size_t>(y) * w + x;
+      const std::int32_t l = table[static_cast<std::size_t>(cand[i])];
+      if (x >= a && x < b)
+        cut[i] = l;
+      else
+        outside += l != 0 ? 1 : 0;
+    }
+  }
+  REQUIRE(outside > 1000);  // labelled pixels the spans leave out
+  for (const cpu::mode m : {cpu::mode::serial, cpu::mode::parallel}) {
+    const cpu b{m};
+    std::vector<std::uint64_t> want(static_cast<std::size_t>(num + 1) * moment_slots, 1), got(want.size(), 2);
+    std::vector<std::int32_t> want_bb(static_cast<std::size_t>(num + 1) * 4, 1), got_bb(want_bb.size(), 2);
+    accumulate_moments(b, make_view<const float>(depth.data(), w, h), k,
+                       detail::candidate_image_labels{make_view<const std::int32_t>(cut.data(), w, h), 0}, num,
+                       want.data(), want_bb.data());
+    accumulate_moments(b, make_view<const float>(depth.data(), w, h), k,
+                       detail::candidate_table_labels{make_view<const std::int32_t>(cand.data(), w, h), table.data(),
+                                                      spans.data(), y0},
+                       num, got.data(), got_bb.data(), y0, y1);
+    CHECK(got == want);
+    CHECK(got_bb == want_bb);
+    int summed = 0;
+    for (int l = 1; l <= num; ++l) summed += want[static_cast<std::size_t>(l) * moment_slots + 10] > 0 ? 1 : 0;
+    CHECK(summed >= 8);  // not vacuous
   }
 }

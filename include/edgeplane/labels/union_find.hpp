@@ -122,7 +122,7 @@ EDGEPLANE_HD EDGEPLANE_INLINE int join_blocks(int w) { return w > 16 ? (w - 1) /
 /// Host row pass of connected_components for adjacencies with has_grid_joins (one work item per
 /// row; rows are independent): parent[i] = -1 for inactive elements, else the first element of
 /// its run of horizontally joined pixels, which is the run's smallest element and its root so far.
-template <class Active, class Adjacency>
+template <class Active, class Adjacency, bool Spans = false>
 struct uf_init_runs_kernel {
   Active active;
   Adjacency adj;
@@ -135,17 +135,29 @@ struct uf_init_runs_kernel {
   /// roots (a component's root is its smallest element, which starts its row's run), so that
   /// root counts need no clearing pass over all elements.
   std::int32_t* zero_heads = nullptr;
+  /// (Spans) row y's active pixels all lie in columns [spans[2y], spans[2y + 1]) (empty where
+  /// the second is not above the first); the row pass reads only from the 16-pixel block holding
+  /// the first of them to the last, and marks the rest inactive without testing them.  (A
+  /// template flag: the pass without spans compiles as it did before them.)
+  const std::int32_t* spans = nullptr;
   EDGEPLANE_HOST_CLONES EDGEPLANE_HD void operator()(std::int64_t row) const {
     const int y = static_cast<int>(row), w = adj.grid_width();
     const std::int64_t o = static_cast<std::int64_t>(y) * w;
     std::int32_t* const zero = zero_heads;
     std::int32_t start = -1;
     bool joined = false;  // the previous pixel joins this one
-    int x = 0;
+    int x = 0, x_end = w;
+    if constexpr (Spans) {  // the block of the span's first pixel .. its end; to its left, inactive
+      x_end = spans[2 * y] < spans[2 * y + 1] ? spans[2 * y + 1] : 0;
+      x = x_end > 0 ? spans[2 * y] / 16 * 16 : 0;
+      for (int i = 0; i < x; ++i) parent[o + i] = -1;
+    }
     if constexpr (has_join_lanes<Adjacency>) {  // 16 pixels' activity and right joins as bits first
       constexpr int L = 16;
       std::uint16_t* const kept = right_bits ? right_bits + static_cast<std::int64_t>(y) * join_blocks(w) : nullptr;
-      for (; x + L < w; x += L) {
+      if (Spans && kept)
+        for (int b = 0; b < x / L; ++b) kept[b] = 0;  // (blocks left of a span: no joins)
+      for (; x + L < w && (!Spans || x < x_end); x += L) {
         unsigned act = 0;
         for (int l = 0; l < L; ++l) act |= static_cast<unsigned>(active(o + x + l)) << l;
         const unsigned right = adj.template right_lanes<L>(x, y);
@@ -165,8 +177,10 @@ struct uf_init_runs_kernel {
           joined = (right >> l) & 1u;
         }
       }
+      if (Spans && kept)
+        for (int b = x / L; b < join_blocks(w); ++b) kept[b] = 0;  // (blocks right of a span)
     }
-    for (; x < w; ++x) {
+    for (; x < x_end; ++x) {
       const std::int64_t i = o + x;
       if (!active(i)) {
         parent[i] = -1;
@@ -180,28 +194,35 @@ struct uf_init_runs_kernel {
       parent[i] = start;
       joined = adj.joins_right(x, y);
     }
+    if constexpr (Spans)
+      for (; x < w; ++x) parent[o + x] = -1;  // right of a span
   }
 };
 /// Then the vertical unions, one work item per row.  Host lanes skip a pair (x, y)-(x, y + 1)
 /// whose left neighbours' pair joins and both join it horizontally: it is already connected through
 /// them (a square of joins), so a run lying on a run is united once per block of 16 pixels, not
 /// once per pixel.  The components, and so their roots (each its smallest element), are the same.
-template <class Adjacency>
+template <class Adjacency, bool Spans = false>
 struct uf_union_down_kernel {
   Adjacency adj;
   std::int32_t* parent;
   const std::uint16_t* right_bits = nullptr;  // uf_init_runs_kernel's, when it kept them
+  const std::int32_t* spans = nullptr;         // uf_init_runs_kernel's, when it had them
   EDGEPLANE_HOST_CLONES EDGEPLANE_HD void operator()(std::int64_t row) const {
     const int y = static_cast<int>(row), w = adj.grid_width();
     const std::int64_t o = static_cast<std::int64_t>(y) * w;
-    int x = 0;
+    int x = 0, x_end = w;
+    if constexpr (Spans) {  // only row y's active pixels join down: its span's blocks
+      x_end = spans[2 * y] < spans[2 * y + 1] ? spans[2 * y + 1] : 0;
+      x = x_end > 0 ? spans[2 * y] / 16 * 16 : 0;
+    }
     if constexpr (has_join_lanes<Adjacency>) {  // 16 pixels' joins as bits, then the unions needed
       constexpr int L = 16;
       if (y + 1 >= adj.grid_height()) return;  // no pixel joins down
-      unsigned carry = 0;  // the previous block's last pixel is a square's left side
+      unsigned carry = 0;  // the previous block's last pixel is a square's left side (none left of a span)
       const int blocks = join_blocks(w);
       const std::uint16_t* const kept = right_bits ? right_bits + static_cast<std::int64_t>(y) * blocks : nullptr;
-      for (; x + L < w; x += L) {
+      for (; x + L < w && (!Spans || x < x_end); x += L) {
         const unsigned down = adj.template down_lanes<L>(x, y);
         // pixels whose pair, and the pairs to their right on both rows, all join
         unsigned right0, right1;
@@ -220,7 +241,7 @@ struct uf_union_down_kernel {
         carry = (square >> (L - 1)) & 1u;
       }
     }
-    for (; x < w; ++x)
+    for (; x < x_end; ++x)
       if (adj.joins_down(x, y)) uf_unite(parent, static_cast<std::int32_t>(o + x), static_cast<std::int32_t>(o + x + w));
   }
 };
@@ -296,11 +317,18 @@ struct eroded_rows_kernel {
   const std::uint8_t* failed;
   image_view<std::uint8_t> mask;
   int r;
+  /// When not null: the columns [a, b) from row y's first pixel of a failed candidate to its last,
+  /// at failed_spans[2y], [2y + 1], and from its first eroded pixel to its last at
+  /// eroded_spans[2y], [2y + 1] (a = w, b = 0 where there are none).
+  std::int32_t* failed_spans = nullptr;
+  std::int32_t* eroded_spans = nullptr;
   EDGEPLANE_HD void operator()(std::int64_t row) const {
     const int y = static_cast<int>(row), w = cand.width, full = 2 * r + 1;
     std::uint8_t* mr = &mask(0, y);
     for (int x = 0; x < w; ++x) mr[x] = 0;
-    if (y < r || y + r >= cand.height) return;  // no window of this row lies inside the image
+    int fa = w, fb = 0, ea = w, eb = 0;
+    const bool windows = y >= r && y + r < cand.height;  // a window of this row lies inside the image
+    if (!windows && !failed_spans) return;
     const std::int32_t* cr = &cand(0, y);
     for (int a = 0; a < w;) {
       const std::int32_t c = cr[a];
@@ -318,7 +346,11 @@ struct eroded_rows_kernel {
         }
         b += 16;
       }
-      if (b - a >= full && c > 0 && failed[c]) {
+      if (c > 0 && failed[c]) {
+        fa = fa < a ? fa : a;
+        fb = b;
+      }
+      if (windows && b - a >= full && c > 0 && failed[c]) {
         const int m = b - a;
         std::uint8_t* v = mr + a;
         for (int l = 0; l < m; ++l) v[l] = 1;
@@ -345,9 +377,19 @@ struct eroded_rows_kernel {
           while (l + 8 <= m && swar::load(v + l) == swar::ones8) l += 8;
           while (l < m && v[l] != 0) ++l;
           for (int q = first + r; q < l - r; ++q) v[q] = 3;
+          if (first + r < l - r) {
+            ea = ea < a + first + r ? ea : a + first + r;
+            eb = a + l - r;
+          }
         }
       }
       a = b;
+    }
+    if (failed_spans) {
+      failed_spans[2 * y] = fa;
+      failed_spans[2 * y + 1] = fb;
+      eroded_spans[2 * y] = ea;
+      eroded_spans[2 * y + 1] = eb;
     }
   }
 };
@@ -466,17 +508,25 @@ struct pair_list_adjacency {
 /// (2r+1)^2 window lies in the same candidate (r >= 0, else edgeplane::error).  Host backends: a
 /// work item per row (detail::eroded_rows_kernel; other bits of `mask` are scratch); device
 /// backends: a work item per pixel (detail::eroded_pixel_kernel).  Asynchronous on device backends.
+/// `failed_spans`, `eroded_spans` (host backends only, 2 * cand.height entries each, or null):
+/// each row's columns [a, b) from its first pixel of a failed candidate to its last, and from its
+/// first marked pixel to its last (a = width, b = 0 where there are none): bounds for the passes
+/// that follow (unite_components' spans, accumulate_moments' spans).
 template <class Backend>
 void erode_failed(const Backend& b, image_view<const std::int32_t> cand, const std::uint8_t* failed, int r,
-                  image_view<std::uint8_t> mask) {
+                  image_view<std::uint8_t> mask, std::int32_t* failed_spans = nullptr,
+                  std::int32_t* eroded_spans = nullptr) {
   detail::check_same_size(cand, mask, "candidates", "mask");
   detail::require(r >= 0, "erode_failed: the erosion radius must be >= 0 (got " + std::to_string(r) + ")");
+  detail::require((failed_spans == nullptr) == (eroded_spans == nullptr),
+                  "erode_failed: give both row span buffers or neither");
   if constexpr (!Backend::host_accessible) {
+    detail::require(failed_spans == nullptr, "erode_failed: row spans are for host backends only");
     detail::for_each_pixel(b, cand.width, cand.height,
                            detail::eroded_pixel_kernel{detail::eroded_failed_active{cand, failed, r}, mask});
     return;
   }
-  b.for_each_index(cand.height, detail::eroded_rows_kernel{cand, failed, mask, r});
+  b.for_each_index(cand.height, detail::eroded_rows_kernel{cand, failed, mask, r, failed_spans, eroded_spans});
 }
 
 namespace detail {
@@ -487,18 +537,27 @@ namespace detail {
 /// the row pass keeps each block's right joins for the vertical unions (which otherwise compute
 /// them again, twice); used only by adjacencies with has_join_lanes.  `zero_roots` (optional, n
 /// elements): returns true where it was set to 0 at every element that can be a root (the host
-/// row pass's run starts), false where it was left untouched.
+/// row pass's run starts), false where it was left untouched.  `spans` (optional, host backends,
+/// grid adjacencies): each row's active pixels lie in columns [spans[2y], spans[2y + 1]), and
+/// the row passes read only those (uf_init_runs_kernel::spans).
 template <class Backend, class Active, class Adjacency>
 bool unite_components(const Backend& b, std::int64_t n, Active active, std::int64_t work_items, Adjacency adj,
-                      std::int32_t* parent, std::uint16_t* right_bits = nullptr, std::int32_t* zero_roots = nullptr) {
+                      std::int32_t* parent, std::uint16_t* right_bits = nullptr, std::int32_t* zero_roots = nullptr,
+                      const std::int32_t* spans = nullptr) {
   require(n >= 0 && n < (std::int64_t(1) << 31), "union-find supports up to 2^31 - 1 elements");
   if constexpr (Backend::host_accessible && has_grid_joins<Adjacency>) {
     require(work_items == n && static_cast<std::int64_t>(adj.grid_width()) * adj.grid_height() == n,
             "connected_components: a grid adjacency needs one work item per pixel of its image");
     if constexpr (!has_join_lanes<Adjacency>) right_bits = nullptr;
-    b.for_each_index(adj.grid_height(),
-                     uf_init_runs_kernel<Active, Adjacency>{active, adj, parent, right_bits, zero_roots});
-    b.for_each_index(adj.grid_height(), uf_union_down_kernel<Adjacency>{adj, parent, right_bits});
+    if (spans) {
+      b.for_each_index(adj.grid_height(),
+                       uf_init_runs_kernel<Active, Adjacency, true>{active, adj, parent, right_bits, zero_roots, spans});
+      b.for_each_index(adj.grid_height(), uf_union_down_kernel<Adjacency, true>{adj, parent, right_bits, spans});
+    } else {
+      b.for_each_index(adj.grid_height(),
+                       uf_init_runs_kernel<Active, Adjacency>{active, adj, parent, right_bits, zero_roots});
+      b.for_each_index(adj.grid_height(), uf_union_down_kernel<Adjacency>{adj, parent, right_bits});
+    }
     return zero_roots != nullptr;
   }
   b.for_each_index(n, uf_init_kernel<Active>{active, parent});

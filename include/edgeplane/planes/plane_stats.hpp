@@ -230,6 +230,15 @@ inline constexpr bool has_sparse_lanes<
     std::enable_if_t<std::is_same_v<decltype(std::declval<const Labels&>().template sparse_lanes<sparse_run>(0, 0, nullptr)), bool>>> =
     true;
 
+/// Whether a label source has columns(y, x0, x1): it narrows [x0, x1) (the whole row on entry) to
+/// the columns of row y that can hold its labels, the only ones the host moments read.
+template <class Labels, class = void>
+inline constexpr bool has_column_spans = false;
+template <class Labels>
+inline constexpr bool has_column_spans<
+    Labels, std::void_t<decltype(std::declval<const Labels&>().columns(0, std::declval<int&>(), std::declval<int&>()))>> =
+    true;
+
 /// Whether a label source has lanes<L>(x, y, out) (the host's moments lanes use it).
 template <class Labels, class = void>
 inline constexpr bool has_label_lanes = false;
@@ -448,9 +457,9 @@ struct moments_kernel {
   // local to this stretch, which the compiler keeps in registers (no call, no other path inside),
   // then added to s (slots 0..9; slot 10 counts the labelled pixels); x1 = the last labelled
   // pixel.  Returns the first block not taken (or the row's last whole block's end).
+  // (w: the end of the row's columns to read)
   EDGEPLANE_INLINE int sum_stretch(int x, int y, std::int32_t cur, std::int32_t* lab, int& x1,
-                                   std::uint64_t* s) const {
-    const int w = depth.width;
+                                   std::uint64_t* s, int w) const {
     std::uint64_t a[10][lanes] = {};
     std::uint64_t count = 0;
     for (;;) {
@@ -496,10 +505,13 @@ struct moments_kernel {
 
   template <class Out>
   EDGEPLANE_HD EDGEPLANE_INLINE void row(int y, Out& flush) const {
-    const int w = depth.width;
+    int x = 0, w = depth.width;  // (w: the end of the columns read)
+#if !defined(__CUDA_ARCH__)
+    if constexpr (has_column_spans<Labels>) label_of.columns(y, x, w);
+#endif
     std::uint64_t s[moment_slots] = {};
     std::int32_t cur = 0;
-    int x0 = 0, x1 = 0, x = 0;
+    int x0 = 0, x1 = 0;
 #if !defined(__CUDA_ARCH__)
     if constexpr (has_sparse_lanes<Labels>) {  // runs without a label skipped at once
       constexpr int S = sparse_run;
@@ -517,7 +529,7 @@ struct moments_kernel {
         continue;
       }
       if (of_run(lab, cur)) {
-        x = sum_stretch(x, y, cur, lab, x1, s);
+        x = sum_stretch(x, y, cur, lab, x1, s, w);
         continue;
       }
       for (int l = 0; l < lanes; ++l) step(flush, s, cur, x0, x1, lab[l], x + l, y);
@@ -612,7 +624,8 @@ inline plane_fit fit_plane(const std::uint64_t* m, const std::int32_t* bb = null
 /// Accumulates the moments and bounding boxes of labels 1..num_labels (label_of(x, y) gives
 /// pixel (x, y)'s label) into backend buffers `moments` ((num_labels + 1) * moment_slots) and `bbox`
 /// ((num_labels + 1) * 4), which this call clears first.  Only rows [row_begin, row_end) are read
-/// (row_end < 0: to the last row): for labels known to lie in those rows.  Asynchronous on device
+/// (row_end < 0: to the last row): for labels known to lie in those rows (host backends: and, for
+/// label sources with has_column_spans, only their columns of each row).  Asynchronous on device
 /// backends.  Precondition: valid depths are at most fixed_point_max_depth(k, w, h) (the
 /// segmenter's depth conversion ensures it), so that the fixed-point sums are exact.
 namespace detail {
