@@ -644,6 +644,7 @@ class segmenter {
     refit_candidates(z, kp, num_cand);
     status_.assign(static_cast<std::size_t>(num_cand), 0);
     for (int c = 0; c < num_cand; ++c) status_[c] = is_plane(fits_[c], p_) ? 1 : 0;
+    int last_x0 = 0, last_y0 = 0;  // (host backends) the last split round's rectangle's corner
     for (int round = 1; round <= p_.split_rounds; ++round) {
       host_failed_.assign(static_cast<std::size_t>(num_cand + 1), 0);
       // The failed candidates' pixels all lie in the union [x0, x1] x [y0, y1] of their bounding
@@ -671,16 +672,39 @@ class segmenter {
       const auto z_r = detail::sub_view(image_view<const float>(z), x0, y0, x1, y1);
       const std::int64_t n_r = static_cast<std::int64_t>(cand_r.width) * cand_r.height;
       // Host backends: the passes after the erosion read each row's span of failed (the refit)
-      // or eroded pixels (the union-find, the ids) only, not the whole rectangle.
-      std::int32_t *failed_spans = nullptr, *eroded_spans = nullptr;
+      // or eroded pixels (the union-find, the ids) only, not the whole rectangle; the erosion
+      // itself looks at the columns of the failed candidates' boxes that cover the row and, after
+      // the first round, at the last round's eroded columns (the only pixels its pieces have).
+      std::int32_t *failed_spans = nullptr, *eroded_spans = nullptr, *scan_spans = nullptr;
       if constexpr (Backend::host_accessible) {
+        scan_spans_.assign(2 * static_cast<std::size_t>(cand_r.height), 0);
+        std::int32_t* sc = scan_spans_.data();
+        for (int y = 0; y < cand_r.height; ++y) sc[2 * y] = cand_r.width;  // (empty)
+        for (int c = 0; c < num_cand; ++c)
+          if (host_failed_[c + 1]) {
+            const std::int32_t* bb = host_bbox_.data() + static_cast<std::size_t>(c + 1) * 4;
+            for (int y = bb[1] - y0; y <= bb[3] - y0; ++y) {
+              sc[2 * y] = std::min(sc[2 * y], bb[0] - x0);
+              sc[2 * y + 1] = std::max(sc[2 * y + 1], bb[2] - x0 + 1);
+            }
+          }
+        if (round > 1)  // within the last round's rectangle, its eroded columns
+          for (int y = 0; y < cand_r.height; ++y) {
+            const int py = y + y0 - last_y0;
+            const bool in = py >= 0 && 2 * static_cast<std::size_t>(py) < eroded_spans_.size();
+            sc[2 * y] = std::max(sc[2 * y], in ? eroded_spans_[2 * static_cast<std::size_t>(py)] + last_x0 - x0 : cand_r.width);
+            sc[2 * y + 1] = std::min(sc[2 * y + 1], in ? eroded_spans_[2 * static_cast<std::size_t>(py) + 1] + last_x0 - x0 : 0);
+          }
         failed_spans_.resize(2 * static_cast<std::size_t>(cand_r.height));
         eroded_spans_.resize(2 * static_cast<std::size_t>(cand_r.height));
         failed_spans = failed_spans_.data();
         eroded_spans = eroded_spans_.data();
+        scan_spans = sc;
+        last_x0 = x0;
+        last_y0 = y0;
       }
       erode_failed(b_, image_view<const std::int32_t>(cand_r), failed_.data(), round * p_.split_erode,
-                   view(cov_l_.data(), cand_r.width, cand_r.height), failed_spans, eroded_spans);
+                   view(cov_l_.data(), cand_r.width, cand_r.height), failed_spans, eroded_spans, scan_spans);
       const detail::mask_bit_active eroded{cov_l_.data(), 2};
       const std::int32_t added =
           components(n_r, eroded, n_r,
@@ -963,8 +987,8 @@ class segmenter {
   std::vector<std::int32_t> kept_roots_;   // the kept roots in order (host backends' numbering)
   std::vector<std::int32_t> piece_of_, largest_, label_table_;  // split rounds' tables (host backends)
   // split rounds' row spans (host backends): of the failed and the eroded pixels, in the round's
-  // rectangle; the failed ones in image columns (the refit's)
-  std::vector<std::int32_t> failed_spans_, eroded_spans_, refit_spans_;
+  // rectangle; the failed ones in image columns (the refit's); the columns the erosion looks at
+  std::vector<std::int32_t> failed_spans_, eroded_spans_, refit_spans_, scan_spans_;
   std::vector<std::int64_t> piece_size_, rest_size_;
   std::vector<std::uint16_t> right_bits_;  // host backends' union-find: right joins per block of 16
   std::vector<std::uint16_t> host_table_, region_origin_;

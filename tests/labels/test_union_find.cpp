@@ -389,6 +389,24 @@ TEST_CASE_TEMPLATE("erode_failed: the separable erosion marks exactly the pixels
           }
           CHECK(wrong == 0);
           if (r > 0) CHECK(empty_eroded >= 2 * r);  // the rows whose windows leave the image
+          // told where each row's failed pixels lie (exactly, or within wider columns), it looks
+          // only there and marks the same
+          std::vector<std::int32_t> wider(fs);
+          for (int y = 0; y < h; ++y) {
+            std::int32_t& a = wider[2 * static_cast<std::size_t>(y)];
+            std::int32_t& e = wider[2 * static_cast<std::size_t>(y) + 1];
+            if (a >= e) a = e = (y * 37) % (w + 1);  // empty, anywhere
+            a = std::max(0, a - (y % 3) * 5);
+            e = std::min(w, e + (y % 4) * 3);
+          }
+          for (const auto* scan : {&fs, &wider}) {
+            std::vector<std::int32_t> fs2(fs.size(), -9), es2(fs.size(), -9);
+            std::fill(mask.data(), mask.data() + mask.size(), std::uint8_t{0x3c});  // (host memory)
+            erode_failed(b, c.cview(w, h), f.data(), r, mask.view(w, h), fs2.data(), es2.data(), scan->data());
+            CHECK(mask.host() == m);
+            CHECK(fs2 == fs);
+            CHECK(es2 == es);
+          }
         } else {
           CHECK_THROWS_AS(erode_failed(b, c.cview(w, h), f.data(), r, mask.view(w, h), fs.data(), es.data()),
                           edgeplane::error);

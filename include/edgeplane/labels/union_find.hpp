@@ -322,6 +322,9 @@ struct eroded_rows_kernel {
   /// eroded_spans[2y], [2y + 1] (a = w, b = 0 where there are none).
   std::int32_t* failed_spans = nullptr;
   std::int32_t* eroded_spans = nullptr;
+  /// When not null: row y's pixels of failed candidates all lie in columns [scan_spans[2y],
+  /// scan_spans[2y + 1]), the only ones whose runs are looked at.
+  const std::int32_t* scan_spans = nullptr;
   EDGEPLANE_HD void operator()(std::int64_t row) const {
     const int y = static_cast<int>(row), w = cand.width, full = 2 * r + 1;
     std::uint8_t* mr = &mask(0, y);
@@ -330,7 +333,8 @@ struct eroded_rows_kernel {
     const bool windows = y >= r && y + r < cand.height;  // a window of this row lies inside the image
     if (!windows && !failed_spans) return;
     const std::int32_t* cr = &cand(0, y);
-    for (int a = 0; a < w;) {
+    const int scan_end = scan_spans ? scan_spans[2 * y + 1] : w;
+    for (int a = scan_spans ? scan_spans[2 * y] : 0; a < scan_end;) {
       const std::int32_t c = cr[a];
       int b = a + 1;
       for (;;) {  // the run's end: 16 lanes compared at a time
@@ -511,22 +515,26 @@ struct pair_list_adjacency {
 /// `failed_spans`, `eroded_spans` (host backends only, 2 * cand.height entries each, or null):
 /// each row's columns [a, b) from its first pixel of a failed candidate to its last, and from its
 /// first marked pixel to its last (a = width, b = 0 where there are none): bounds for the passes
-/// that follow (unite_components' spans, accumulate_moments' spans).
+/// that follow (unite_components' spans, accumulate_moments' spans).  `scan_spans` (host backends
+/// only, or null): each row's pixels of failed candidates lie in columns [scan_spans[2y],
+/// scan_spans[2y + 1]), the only ones read in the row itself.
 template <class Backend>
 void erode_failed(const Backend& b, image_view<const std::int32_t> cand, const std::uint8_t* failed, int r,
                   image_view<std::uint8_t> mask, std::int32_t* failed_spans = nullptr,
-                  std::int32_t* eroded_spans = nullptr) {
+                  std::int32_t* eroded_spans = nullptr, const std::int32_t* scan_spans = nullptr) {
   detail::check_same_size(cand, mask, "candidates", "mask");
   detail::require(r >= 0, "erode_failed: the erosion radius must be >= 0 (got " + std::to_string(r) + ")");
   detail::require((failed_spans == nullptr) == (eroded_spans == nullptr),
                   "erode_failed: give both row span buffers or neither");
   if constexpr (!Backend::host_accessible) {
-    detail::require(failed_spans == nullptr, "erode_failed: row spans are for host backends only");
+    detail::require(failed_spans == nullptr && scan_spans == nullptr,
+                    "erode_failed: row spans are for host backends only");
     detail::for_each_pixel(b, cand.width, cand.height,
                            detail::eroded_pixel_kernel{detail::eroded_failed_active{cand, failed, r}, mask});
     return;
   }
-  b.for_each_index(cand.height, detail::eroded_rows_kernel{cand, failed, mask, r, failed_spans, eroded_spans});
+  b.for_each_index(cand.height,
+                   detail::eroded_rows_kernel{cand, failed, mask, r, failed_spans, eroded_spans, scan_spans});
 }
 
 namespace detail {
