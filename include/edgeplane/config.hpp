@@ -48,7 +48,7 @@
 #endif
 
 // Host kernels whose inner loops are SIMD over pixels (the edge pass, smoothing, the depth
-// closing, moments, growth, the failed-candidate erosion) are compiled three times on x86-64 ELF
+// closing, moments, growth, the union-find's row passes) are compiled three times on x86-64 ELF
 // systems, for x86-64-v4 (AVX-512), x86-64-v3 (AVX2) and the baseline, and the loader picks the
 // widest the CPU runs (GCC/Clang target_clones).  The results are those of the baseline: the
 // library compiles with -ffp-contract=off (no fused multiply-add under any target), and every
@@ -60,6 +60,16 @@
 #define EDGEPLANE_HOST_CLONES __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
 #else
 #define EDGEPLANE_HOST_CLONES
+#endif
+
+// The host edge kernel (about 59 KB of code per clone) starts on a 4 KB boundary.  Where it
+// happened to start within a page, which any change elsewhere in a program moves, changed the
+// edge pass by up to 18 % with identical instructions (benchmarks/RESULTS.md, session 30, item
+// 89); fixed, the kernel runs as fast in every program compiled alike.  GCC and Clang host code.
+#if !defined(__CUDACC__) && defined(__GNUC__)
+#define EDGEPLANE_PAGE_ALIGNED __attribute__((aligned(4096)))
+#else
+#define EDGEPLANE_PAGE_ALIGNED
 #endif
 
 // Device code asserts only in debug builds (never in release kernels).

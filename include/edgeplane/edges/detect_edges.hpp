@@ -861,7 +861,7 @@ struct all_edges_rows_kernel {
     }
   }
 
-  EDGEPLANE_HOST_CLONES EDGEPLANE_HD void operator()(std::int64_t item) const {
+  EDGEPLANE_PAGE_ALIGNED EDGEPLANE_HOST_CLONES EDGEPLANE_HD void operator()(std::int64_t item) const {
     const int y = static_cast<int>(item / chunks), x0 = static_cast<int>(item % chunks) * Lanes;
     const int w = px.depth.width, h = px.depth.height, r = px.reach;
     // A run must not pass the row's end.  Every lane reads up to r steps of up to w + 1 elements
