@@ -153,6 +153,27 @@ struct write_candidates_kernel {
     cand[i] = r >= 0 && flags[r] ? scan[r] : 0;
   }
 };
+/// write_candidates_kernel on host backends, one work item per `span` elements, where the
+/// numbering left scan[r] = 0 at the roots of components not kept (and scan[0] written): one
+/// table read per element and no branch (the per-element form's two branches, on inactive
+/// elements and on dropped components, which interleave with the kept ones, took twice the time).
+struct write_candidates_span_kernel {
+  const std::int32_t* parent;
+  const std::int32_t* scan;  // a root's number, 0 where its component is not kept
+  std::int32_t* cand;
+  std::int64_t n;
+  int span;
+  EDGEPLANE_HOST_CLONES void operator()(std::int64_t item) const {
+    const std::int64_t i0 = item * span, i1 = i0 + span < n ? i0 + span : n;
+    const std::int32_t* __restrict p = parent;
+    const std::int32_t* __restrict ids = scan;
+    std::int32_t* __restrict out = cand;
+    for (std::int64_t i = i0; i < i1; ++i) {
+      const std::int32_t r = p[i], inactive = r >> 31;  // -1 where r < 0 (C++20: arithmetic shift)
+      out[i] = ids[r & ~inactive] & ~inactive;          // (an inactive element reads ids[0], gets 0)
+    }
+  }
+};
 /// A split round's ids over a rectangle of the candidate image (`cand`, a view of it), whose
 /// pixel (x, y) is element y * cand.width + x of the union-find: pixels of kept components get
 /// offset + the 1-based index of their root among the kept roots; all others keep their value, so
@@ -378,7 +399,8 @@ class segmenter {
     if constexpr (Backend::host_accessible) {
       // The blocks count their roots' elements and list their roots (in flags_); then the roots
       // are numbered in order here, writing flags_ and scan_ at the roots only (the only entries
-      // anyone reads: every reader indexes them by a flattened parent).  A block's list lies in
+      // anyone reads: every reader indexes them by a flattened parent; scan_ is 0 at the roots not
+      // kept, which write_candidates_span_kernel relies on).  A block's list lies in
       // its own elements, the only ones its roots' entries can overwrite, so it is copied out first.
       // blocks of 1024 elements, halved (to 128 at least) until there are 64 of them: the CPU
       // backend runs fewer work items serially (a 256x212 frame had 53)
@@ -394,6 +416,7 @@ class segmenter {
       const std::int32_t* count = count_.data();
       std::int32_t k = 0, list[max_block];
       kept_roots_.clear();
+      if (n > 0) scan[0] = 0;  // (write_candidates_span_kernel reads it for inactive elements; a root 0 sets its own)
       for (std::int64_t blk = 0; blk < blocks; ++blk) {
         const std::int32_t m = block_roots_[static_cast<std::size_t>(blk)];
         std::copy(flags + blk * block, flags + blk * block + m, list);
@@ -402,7 +425,7 @@ class segmenter {
           const std::int32_t keep = count[r] >= min_size ? 1 : 0;
           k += keep;
           flags[r] = keep;
-          scan[r] = k;  // the inclusive scan of the flags, at r
+          scan[r] = keep ? k : 0;  // the inclusive scan of the flags at kept roots (0 at the others)
           if (keep) kept_roots_.push_back(r);
         }
       }
@@ -634,7 +657,13 @@ class segmenter {
                    detail::grid4_adjacency<detail::covered_active>{z, covered, p_.t_je, p_.t_je_quad, slope_inv_f},
                    p_.t_size);
     // each pixel's candidate id (0 for pixels of no kept component)
-    b_.for_each_index(n, detail::write_candidates_kernel{parent_.data(), flags_.data(), scan_.data(), cand_.data()});
+    if constexpr (Backend::host_accessible) {
+      constexpr int span = 4096;
+      b_.for_each_index((n + span - 1) / span,
+                        detail::write_candidates_span_kernel{parent_.data(), scan_.data(), cand_.data(), n, span});
+    } else {
+      b_.for_each_index(n, detail::write_candidates_kernel{parent_.data(), flags_.data(), scan_.data(), cand_.data()});
+    }
     out.candidates = num_cand;
     b_.synchronize();
     out.times.candidates = ms_since(t);
