@@ -466,6 +466,35 @@ class segmenter {
     }
   }
 
+  // Host backends, a split round over the w x h rectangle at (x0, y0): the columns of each of its
+  // rows that the erosion reads (scan_spans_, in the rectangle's columns; returned), those of the
+  // failed candidates' boxes (host_failed_, host_bbox_) that cover the row and, after the first
+  // round (after_round, whose rectangle was at (last_x0, last_y0)), within that round's eroded
+  // columns (eroded_spans_): its pieces, the only candidates that can have failed since, lie there.
+  std::int32_t* split_scan_spans(std::int32_t num_cand, int x0, int y0, int w, int h, bool after_round, int last_x0,
+                                 int last_y0) {
+    scan_spans_.assign(2 * static_cast<std::size_t>(h), 0);
+    std::int32_t* sc = scan_spans_.data();
+    for (int y = 0; y < h; ++y) sc[2 * y] = w;  // (empty)
+    for (int c = 0; c < num_cand; ++c)
+      if (host_failed_[c + 1]) {
+        const std::int32_t* bb = host_bbox_.data() + static_cast<std::size_t>(c + 1) * 4;
+        for (int y = bb[1] - y0; y <= bb[3] - y0; ++y) {
+          sc[2 * y] = std::min(sc[2 * y], bb[0] - x0);
+          sc[2 * y + 1] = std::max(sc[2 * y + 1], bb[2] - x0 + 1);
+        }
+      }
+    if (after_round)
+      for (int y = 0; y < h; ++y) {
+        const int py = y + y0 - last_y0;  // the row in the last rectangle, whose columns start at last_x0
+        const bool in = py >= 0 && 2 * static_cast<std::size_t>(py) < eroded_spans_.size();
+        const std::int32_t* e = eroded_spans_.data() + 2 * static_cast<std::size_t>(in ? py : 0);
+        sc[2 * y] = std::max(sc[2 * y], in ? e[0] + last_x0 - x0 : w);
+        sc[2 * y + 1] = std::min(sc[2 * y + 1], in ? e[1] + last_x0 - x0 : 0);
+      }
+    return sc;
+  }
+
   // Host backends: the moment blocks, boxes and fits of a split round's pieces, candidates
   // num_cand+1 .. num_cand+added, after their ids are written (split_parents before that), in rows
   // [y0, y1] and, of row y, columns [refit_spans_[2 (y - y0)], refit_spans_[2 (y - y0) + 1]) (the
@@ -706,29 +735,11 @@ class segmenter {
       // the first round, at the last round's eroded columns (the only pixels its pieces have).
       std::int32_t *failed_spans = nullptr, *eroded_spans = nullptr, *scan_spans = nullptr;
       if constexpr (Backend::host_accessible) {
-        scan_spans_.assign(2 * static_cast<std::size_t>(cand_r.height), 0);
-        std::int32_t* sc = scan_spans_.data();
-        for (int y = 0; y < cand_r.height; ++y) sc[2 * y] = cand_r.width;  // (empty)
-        for (int c = 0; c < num_cand; ++c)
-          if (host_failed_[c + 1]) {
-            const std::int32_t* bb = host_bbox_.data() + static_cast<std::size_t>(c + 1) * 4;
-            for (int y = bb[1] - y0; y <= bb[3] - y0; ++y) {
-              sc[2 * y] = std::min(sc[2 * y], bb[0] - x0);
-              sc[2 * y + 1] = std::max(sc[2 * y + 1], bb[2] - x0 + 1);
-            }
-          }
-        if (round > 1)  // within the last round's rectangle, its eroded columns
-          for (int y = 0; y < cand_r.height; ++y) {
-            const int py = y + y0 - last_y0;
-            const bool in = py >= 0 && 2 * static_cast<std::size_t>(py) < eroded_spans_.size();
-            sc[2 * y] = std::max(sc[2 * y], in ? eroded_spans_[2 * static_cast<std::size_t>(py)] + last_x0 - x0 : cand_r.width);
-            sc[2 * y + 1] = std::min(sc[2 * y + 1], in ? eroded_spans_[2 * static_cast<std::size_t>(py) + 1] + last_x0 - x0 : 0);
-          }
+        scan_spans = split_scan_spans(num_cand, x0, y0, cand_r.width, cand_r.height, round > 1, last_x0, last_y0);
         failed_spans_.resize(2 * static_cast<std::size_t>(cand_r.height));
         eroded_spans_.resize(2 * static_cast<std::size_t>(cand_r.height));
         failed_spans = failed_spans_.data();
         eroded_spans = eroded_spans_.data();
-        scan_spans = sc;
         last_x0 = x0;
         last_y0 = y0;
       }

@@ -119,6 +119,13 @@ inline constexpr bool has_join_lanes = has_grid_joins<Adjacency> && requires(con
 /// right_bits): those from x = 0, 16, ... with x + 16 < w.
 EDGEPLANE_HD EDGEPLANE_INLINE int join_blocks(int w) { return w > 16 ? (w - 1) / 16 : 0; }
 
+/// Row y's span [spans[2y], spans[2y + 1]) widened to whole blocks of 16 on the left: x = the
+/// first column of the block holding its first pixel, x_end = its end (both 0 where it is empty).
+EDGEPLANE_HD EDGEPLANE_INLINE void span_from_block(const std::int32_t* spans, int y, int& x, int& x_end) {
+  x_end = spans[2 * y] < spans[2 * y + 1] ? spans[2 * y + 1] : 0;
+  x = x_end > 0 ? spans[2 * y] / 16 * 16 : 0;
+}
+
 /// Host row pass of connected_components for adjacencies with has_grid_joins (one work item per
 /// row; rows are independent): parent[i] = -1 for inactive elements, else the first element of
 /// its run of horizontally joined pixels, which is the run's smallest element and its root so far.
@@ -148,8 +155,7 @@ struct uf_init_runs_kernel {
     bool joined = false;  // the previous pixel joins this one
     int x = 0, x_end = w;
     if constexpr (Spans) {  // the block of the span's first pixel .. its end; to its left, inactive
-      x_end = spans[2 * y] < spans[2 * y + 1] ? spans[2 * y + 1] : 0;
-      x = x_end > 0 ? spans[2 * y] / 16 * 16 : 0;
+      span_from_block(spans, y, x, x_end);
       for (int i = 0; i < x; ++i) parent[o + i] = -1;
     }
     if constexpr (has_join_lanes<Adjacency>) {  // 16 pixels' activity and right joins as bits first
@@ -212,10 +218,7 @@ struct uf_union_down_kernel {
     const int y = static_cast<int>(row), w = adj.grid_width();
     const std::int64_t o = static_cast<std::int64_t>(y) * w;
     int x = 0, x_end = w;
-    if constexpr (Spans) {  // only row y's active pixels join down: its span's blocks
-      x_end = spans[2 * y] < spans[2 * y + 1] ? spans[2 * y + 1] : 0;
-      x = x_end > 0 ? spans[2 * y] / 16 * 16 : 0;
-    }
+    if constexpr (Spans) span_from_block(spans, y, x, x_end);  // only row y's active pixels join down
     if constexpr (has_join_lanes<Adjacency>) {  // 16 pixels' joins as bits, then the unions needed
       constexpr int L = 16;
       if (y + 1 >= adj.grid_height()) return;  // no pixel joins down
@@ -350,11 +353,12 @@ struct eroded_rows_kernel {
         }
         b += 16;
       }
-      if (c > 0 && failed[c]) {
+      const bool of_failed = c > 0 && failed[c];
+      if (of_failed) {
         fa = fa < a ? fa : a;
         fb = b;
       }
-      if (windows && b - a >= full && c > 0 && failed[c]) {
+      if (of_failed && windows && b - a >= full) {
         const int m = b - a;
         std::uint8_t* v = mr + a;
         for (int l = 0; l < m; ++l) v[l] = 1;
@@ -515,7 +519,7 @@ struct pair_list_adjacency {
 /// `failed_spans`, `eroded_spans` (host backends only, 2 * cand.height entries each, or null):
 /// each row's columns [a, b) from its first pixel of a failed candidate to its last, and from its
 /// first marked pixel to its last (a = width, b = 0 where there are none): bounds for the passes
-/// that follow (unite_components' spans, accumulate_moments' spans).  `scan_spans` (host backends
+/// that follow (unite_components' spans; candidate_table_labels' column spans for the moments).  `scan_spans` (host backends
 /// only, or null): each row's pixels of failed candidates lie in columns [scan_spans[2y],
 /// scan_spans[2y + 1]), the only ones read in the row itself.
 template <class Backend>
