@@ -209,15 +209,15 @@ struct write_members_rows {
 struct candidate_table_labels {
   image_view<const std::int32_t> cand;
   const std::int32_t* table;
-  /// When not null: the labels of row y lie in columns [spans[2 (y - row0)], spans[2 (y - row0) + 1])
+  /// When not null: the labels of row y lie in columns [col0 + spans[2 (y - row0)], col0 + spans[2 (y - row0) + 1])
   /// (the host moments read only those: has_column_spans).
   const std::int32_t* spans = nullptr;
-  int row0 = 0;
+  int row0 = 0, col0 = 0;
   EDGEPLANE_HD std::int32_t operator()(int x, int y) const { return table[cand(x, y)]; }
   EDGEPLANE_HD void columns(int y, int& x0, int& x1) const {
     if (!spans) return;
-    x0 = spans[2 * (y - row0)];
-    x1 = spans[2 * (y - row0) + 1];
+    x0 = col0 + spans[2 * (y - row0)];
+    x1 = col0 + spans[2 * (y - row0) + 1];
   }
 };
 /// The rectangle [x0, x1] x [y0, y1] of view v as a view of its own (same pitch).
@@ -497,15 +497,15 @@ class segmenter {
 
   // Host backends: the moment blocks, boxes and fits of a split round's pieces, candidates
   // num_cand+1 .. num_cand+added, after their ids are written (split_parents before that), in rows
-  // [y0, y1] and, of row y, columns [refit_spans_[2 (y - y0)], refit_spans_[2 (y - y0) + 1]) (the
+  // [y0, y1] and, of row y, columns x0 + [failed_spans_[2 (y - y0)], failed_spans_[2 (y - y0) + 1]) (the
   // failed candidates' pixels).  Where a split candidate's largest piece outweighs the pixels of it that no piece took
   // (its rim and dropped components, which keep its id), that piece is not summed: its sums are
   // the candidate's less those of the rest and of its other pieces (integers: exactly the piece's
   // own sums), so a candidate that loses only its rim costs the sums of its rim.  That piece's box
   // is its candidate's (a box around its pixels, which is all a box serves for: the next round's
   // rectangle).
-  void split_refit(image_view<const float> z, const intrinsics& kp, image_view<const std::int32_t> cand, int y0,
-                   int y1, std::int32_t num_cand, std::int32_t added) {
+  void split_refit(image_view<const float> z, const intrinsics& kp, image_view<const std::int32_t> cand, int x0,
+                   int y0, int y1, std::int32_t num_cand, std::int32_t added) {
     const std::size_t slots = moment_slots;
     const std::int32_t total = num_cand + added;
     largest_.assign(static_cast<std::size_t>(num_cand) + 1, 0);      // candidate -> its largest piece
@@ -532,7 +532,7 @@ class segmenter {
     }
     moments_.resize(static_cast<std::size_t>(labels + 1) * slots);
     bbox_.resize(static_cast<std::size_t>(labels + 1) * 4);
-    accumulate_moments(b_, z, kp, detail::candidate_table_labels{cand, label_table_.data(), refit_spans_.data(), y0},
+    accumulate_moments(b_, z, kp, detail::candidate_table_labels{cand, label_table_.data(), failed_spans_.data(), y0, x0},
                        labels, moments_.data(), bbox_.data(), y0, y1 + 1);
     const std::uint64_t* m = moments_.data();
     const std::int32_t* bb = bbox_.data();
@@ -759,9 +759,7 @@ class segmenter {
       }
       if (added == 0) break;
       if constexpr (Backend::host_accessible) {
-        refit_spans_.resize(failed_spans_.size());
-        for (std::size_t i = 0; i < refit_spans_.size(); ++i) refit_spans_[i] = failed_spans_[i] + x0;
-        split_refit(z, kp, image_view<const std::int32_t>(cand), y0, y1, num_cand, added);
+        split_refit(z, kp, image_view<const std::int32_t>(cand), x0, y0, y1, num_cand, added);
       } else
         refit_candidates(z, kp, num_cand + added, num_cand, y0, y1 + 1);
       num_cand += added;
@@ -1028,7 +1026,7 @@ class segmenter {
   std::vector<std::int32_t> piece_of_, largest_, label_table_;  // split rounds' tables (host backends)
   // split rounds' row spans (host backends): of the failed and the eroded pixels, in the round's
   // rectangle; the failed ones in image columns (the refit's); the columns the erosion looks at
-  std::vector<std::int32_t> failed_spans_, eroded_spans_, refit_spans_, scan_spans_;
+  std::vector<std::int32_t> failed_spans_, eroded_spans_, scan_spans_;
   std::vector<std::int64_t> piece_size_, rest_size_;
   std::vector<std::uint16_t> right_bits_;  // host backends' union-find: right joins per block of 16
   std::vector<std::uint16_t> host_table_, region_origin_;

@@ -616,10 +616,11 @@ TEST_CASE("accumulate_moments: a label source's column spans (has_column_spans) 
   // The segmenter's split rounds sum their pieces through candidate_table_labels with each row's
   // span of failed pixels.  Here the spans are random (empty ones too) and labelled pixels lie
   // outside them, which must not be read: the sums and boxes are those of the label image cut to
-  // the spans and to the row range, summed without spans.
+  // the spans and to the row range, summed without spans.  The spans count from a column offset, as
+  // the segmenter's count from its round's rectangle.
   static_assert(detail::has_column_spans<detail::candidate_table_labels>);
   static_assert(!detail::has_column_spans<detail::candidate_image_labels>);
-  const int w = 157, h = 300, num = 13, y0 = 5, y1 = h - 3;
+  const int w = 157, h = 300, num = 13, y0 = 5, y1 = h - 3, x_off = 11;
   const auto k = camera(w, h);
   auto depth = plane_image(k, w, h, normalized({0.2, -0.4, -1.0}), 2.6);
   lcg_noise noise(9);
@@ -636,9 +637,10 @@ TEST_CASE("accumulate_moments: a label source's column spans (has_column_spans) 
   std::vector<std::int32_t> cut(cand.size(), 0);  // the labels the spans keep
   int outside = 0;
   for (int y = y0; y < y1; ++y) {
-    const int a = static_cast<int>(noise.next_u32(w / 2 + 1)), b = (y % 9 == 0) ? a : a + static_cast<int>(noise.next_u32(w - a + 1));
-    spans[2 * static_cast<std::size_t>(y - y0)] = a;
-    spans[2 * static_cast<std::size_t>(y - y0) + 1] = b;
+    const int a = x_off + static_cast<int>(noise.next_u32((w - x_off) / 2 + 1)),
+              b = (y % 9 == 0) ? a : a + static_cast<int>(noise.next_u32(w - a + 1));
+    spans[2 * static_cast<std::size_t>(y - y0)] = a - x_off;  // spans count from column x_off (col0)
+    spans[2 * static_cast<std::size_t>(y - y0) + 1] = b - x_off;
     for (int x = 0; x < w; ++x) {
       const std::size_t i = static_cast<std::size_t>(y) * w + x;
       const std::int32_t l = table[static_cast<std::size_t>(cand[i])];
@@ -658,7 +660,7 @@ TEST_CASE("accumulate_moments: a label source's column spans (has_column_spans) 
                        want.data(), want_bb.data());
     accumulate_moments(b, make_view<const float>(depth.data(), w, h), k,
                        detail::candidate_table_labels{make_view<const std::int32_t>(cand.data(), w, h), table.data(),
-                                                      spans.data(), y0},
+                                                      spans.data(), y0, x_off},
                        num, got.data(), got_bb.data(), y0, y1);
     CHECK(got == want);
     CHECK(got_bb == want_bb);
