@@ -61,64 +61,6 @@ struct count_roots_kernel {
     if (r >= 0) atomic_add(count + r, 1);
   }
 };
-/// Host form of count_roots_kernel: one work item per block of `block` elements, one atomic add
-/// per run of elements with the same root (a component's pixels come in long runs), so the two
-/// threads of a small machine do not take turns on one counter for every pixel.
-/// Each block also lists its roots (elements that are their own parent), in order, at
-/// roots[i0], roots[i0 + 1], ... (i0 = the block's first element), and their number at
-/// nroots[item].  The union-find need not be flattened: the kernel flattens its block (parent[i]
-/// = i's root), as uf_flatten_kernel does; an element whose parent is the one the previous walk
-/// started from takes that walk's root (the roots are final: no union runs any more), so a
-/// horizontal run linked to its first pixel is walked once, not once per pixel.  Inactive elements
-/// (-1) do not end a root's run (a row's pixels of one component between inactive ones add once),
-/// and 16 inactive ones are passed over at once.
-struct count_roots_blocks_kernel {
-  std::int32_t* parent;
-  std::int32_t* count;
-  std::int64_t n;
-  int block;
-  std::int32_t* roots;
-  std::int32_t* nroots;
-  static constexpr int lanes = 16;
-  // every element of i .. i + lanes - 1 inactive (parent -1).  Plain reads: only this work item
-  // writes its block's entries (other items' walks only read them).
-  EDGEPLANE_HD EDGEPLANE_INLINE bool inactive_lanes(std::int64_t i) const {
-    const std::int32_t* p = parent + i;
-    std::int32_t all = -1;
-    for (int l = 0; l < lanes; ++l) all &= p[l];
-    return all < 0;  // (the sign bit stays set only if every entry is negative)
-  }
-  EDGEPLANE_HD void operator()(std::int64_t item) const {
-    const std::int64_t i0 = item * block, i1 = i0 + block < n ? i0 + block : n;
-    std::int32_t cur = -1, run = 0, listed = 0;
-    std::int32_t walked = -1, walked_root = -1;  // the parent the last walk started from, its root
-    for (std::int64_t c0 = i0; c0 < i1; c0 += lanes) {
-      const std::int64_t c1 = c0 + lanes < i1 ? c0 + lanes : i1;
-      if (c1 - c0 == lanes && inactive_lanes(c0)) continue;  // (split rounds: most of their rectangle)
-      for (std::int64_t i = c0; i < c1; ++i) {
-        std::int32_t r = atomic_load(parent + i);
-        if (r < 0) continue;  // inactive: does not end the current root's run
-        if (r != cur) {       // (an element of the current root's run is flat already)
-          if (r != walked) {
-            walked = r;
-            walked_root = uf_root(parent, static_cast<std::int32_t>(i));
-          }
-          r = walked_root;
-          atomic_store(parent + i, r);
-        }
-        if (r != cur) {
-          if (cur >= 0) atomic_add(count + cur, run);
-          cur = r;
-          run = 0;
-        }
-        ++run;
-        if (r == static_cast<std::int32_t>(i)) roots[i0 + listed++] = r;
-      }
-    }
-    if (cur >= 0) atomic_add(count + cur, run);
-    nroots[item] = listed;
-  }
-};
 /// Throws edgeplane::error unless a frame's depth view, depth scale and intrinsics can be segmented.
 template <class In>
 void check_frame(image_view<const In> depth, float scale, const intrinsics& k) {
@@ -154,9 +96,11 @@ struct write_candidates_kernel {
   }
 };
 /// write_candidates_kernel on host backends, one work item per `span` elements, where the
-/// numbering left scan[r] = 0 at the roots of components not kept (and scan[0] written): one
-/// table read per element and no branch (the per-element form's two branches, on inactive
-/// elements and on dropped components, which interleave with the kept ones, took twice the time).
+/// numbering left scan[r] = 0 at the roots of components not kept (and scan[0] written), and the
+/// union-find is counted by runs (uf_count_runs_kernel: an element's root is parent[parent[i]],
+/// parent[0] readable): two reads and one table read per element and no branch (the per-element
+/// form's two branches, on inactive elements and on dropped components, which interleave with the
+/// kept ones, took twice the time).
 struct write_candidates_span_kernel {
   const std::int32_t* parent;
   const std::int32_t* scan;  // a root's number, 0 where its component is not kept
@@ -169,8 +113,9 @@ struct write_candidates_span_kernel {
     const std::int32_t* __restrict ids = scan;
     std::int32_t* __restrict out = cand;
     for (std::int64_t i = i0; i < i1; ++i) {
-      const std::int32_t r = p[i], inactive = r >> 31;  // -1 where r < 0 (C++20: arithmetic shift)
-      out[i] = ids[r & ~inactive] & ~inactive;          // (an inactive element reads ids[0], gets 0)
+      const std::int32_t h = p[i], inactive = h >> 31;  // -1 where h < 0 (C++20: arithmetic shift)
+      const std::int32_t r = p[h & ~inactive] & ~inactive;  // (an inactive element reads p[0], ids[0], gets 0)
+      out[i] = ids[r] & ~inactive;
     }
   }
 };
@@ -179,7 +124,7 @@ struct write_candidates_span_kernel {
 /// offset + the 1-based index of their root among the kept roots; all others keep their value, so
 /// a split candidate's pixels that no piece took (its rim and its dropped components) keep its
 /// id.  A retired id counts as none everywhere after: its status keeps it out of the merge table,
-/// the failed flags and the refits, as 0 is.
+/// the failed flags and the refits, as 0 is.  `parent` flat or counted by runs (uf_head_root).
 struct write_members_kernel {
   const std::int32_t* parent;
   const std::int32_t* flags;
@@ -187,7 +132,7 @@ struct write_members_kernel {
   std::int32_t offset;
   image_view<std::int32_t> cand;
   EDGEPLANE_HD void operator()(int x, int y) const {
-    const std::int32_t r = parent[static_cast<std::int64_t>(y) * cand.width + x];
+    const std::int32_t r = uf_head_root(parent, static_cast<std::int64_t>(y) * cand.width + x);
     if (r >= 0 && flags[r]) cand(x, y) = offset + scan[r];
   }
 };
@@ -368,76 +313,73 @@ class segmenter {
 
   // The connected components (into parent_) of the n elements, their roots flagged (flags_) where
   // they have at least min_size elements and numbered 1, 2, ... in raster order of the roots
-  // (scan_); returns how many.  Host backends leave the union-find's flattening to the counting
-  // pass of flag_components.
+  // (scan_); returns how many.  Host backends count the components by the row pass's runs
+  // (uf_count_runs_kernel), which flattens only the runs' first elements: parent_ is then read
+  // through detail::uf_head_root.
   // (spans: host backends, the rows' column spans of the active elements, unite_components')
   template <class Active, class Adjacency>
   std::int32_t components(std::int64_t n, Active active, std::int64_t work_items, Adjacency adj,
                           std::int32_t min_size, const std::int32_t* spans = nullptr) {
     if constexpr (Backend::host_accessible) {
+      static_assert(detail::has_grid_joins<Adjacency>, "host components are counted by the row pass's runs");
       std::uint16_t* right_bits = nullptr;  // the row pass's right joins, for the vertical unions
       if constexpr (detail::has_join_lanes<Adjacency>) {
         right_bits_.resize(static_cast<std::size_t>(detail::join_blocks(adj.grid_width())) * adj.grid_height());
         right_bits = right_bits_.data();
       }
-      // the row pass zeroes the counts of the elements that can be roots, if it runs by rows
-      const bool zeroed = detail::unite_components(b_, n, active, work_items, adj, parent_.data(), right_bits,
-                                                   count_.data(), spans);
-      return flag_components(n, min_size, zeroed);
+      // the runs' lengths in count_, their first elements listed per row in flags_
+      row_heads_.resize(static_cast<std::size_t>(adj.grid_height()));
+      const detail::row_runs runs{count_.data(), flags_.data(), row_heads_.data()};
+      detail::unite_components(b_, n, active, work_items, adj, parent_.data(), right_bits, runs, spans);
+      return number_runs(adj.grid_width(), adj.grid_height(), runs, min_size);
     } else {
       connected_components(b_, n, active, work_items, adj, parent_.data());
       return flag_components(n, min_size);
     }
   }
 
-  // Flags (flags_) the roots of union-find components of at least min_size elements and numbers
-  // them 1, 2, ... in raster order of their roots (scan_); returns how many.  Host backends: the
-  // union-find need not be flat yet (the counting pass flattens it).
-  // (counts_zeroed: count_ is 0 at every root already; only roots' counts are written and read)
-  std::int32_t flag_components(std::int64_t n, std::int32_t min_size, bool counts_zeroed = false) {
-    if (!counts_zeroed) b_.memset(count_.data(), 0, sizeof(std::int32_t) * n);
-    if constexpr (Backend::host_accessible) {
-      // The blocks count their roots' elements and list their roots (in flags_); then the roots
-      // are numbered in order here, writing flags_ and scan_ at the roots only (the only entries
-      // anyone reads: every reader indexes them by a flattened parent; scan_ is 0 at the roots not
-      // kept, which write_candidates_span_kernel relies on).  A block's list lies in
-      // its own elements, the only ones its roots' entries can overwrite, so it is copied out first.
-      // blocks of 1024 elements, halved (to 128 at least) until there are 64 of them: the CPU
-      // backend runs fewer work items serially (a 256x212 frame had 53)
-      constexpr int max_block = 1024;
-      int block = max_block;
-      while (block > 128 && n < detail::host_parallel_items * block) block /= 2;
-      const std::int64_t blocks = (n + block - 1) / block;
-      block_roots_.resize(static_cast<std::size_t>(blocks));
-      b_.for_each_index(blocks, detail::count_roots_blocks_kernel{parent_.data(), count_.data(), n, block,
-                                                                  flags_.data(), block_roots_.data()});
-      std::int32_t* flags = flags_.data();
-      std::int32_t* scan = scan_.data();
-      const std::int32_t* count = count_.data();
-      std::int32_t k = 0, list[max_block];
-      kept_roots_.clear();
-      if (n > 0) scan[0] = 0;  // (write_candidates_span_kernel reads it for inactive elements; a root 0 sets its own)
-      for (std::int64_t blk = 0; blk < blocks; ++blk) {
-        const std::int32_t m = block_roots_[static_cast<std::size_t>(blk)];
-        std::copy(flags + blk * block, flags + blk * block + m, list);
-        for (std::int32_t j = 0; j < m; ++j) {
-          const std::int32_t r = list[j];
-          const std::int32_t keep = count[r] >= min_size ? 1 : 0;
-          k += keep;
-          flags[r] = keep;
-          scan[r] = keep ? k : 0;  // the inclusive scan of the flags at kept roots (0 at the others)
-          if (keep) kept_roots_.push_back(r);
-        }
+  // Host backends: counts the components of the w x h grid by the row pass's runs (into count_ at
+  // the roots), flags (flags_) the roots of those of at least min_size elements and numbers them
+  // 1, 2, ... in raster order of their roots (scan_); returns how many.  flags_ and scan_ are
+  // written at the roots only (the only entries anyone reads: every reader indexes them by a root;
+  // scan_ is 0 at the roots not kept, which write_candidates_span_kernel relies on).  A row's list
+  // of roots (in flags_) lies in its own elements, the only ones its roots' entries can overwrite,
+  // so it is copied out first.
+  std::int32_t number_runs(int w, int h, detail::row_runs runs, std::int32_t min_size) {
+    b_.for_each_index(h, detail::uf_count_runs_kernel{parent_.data(), runs, w});
+    std::int32_t* flags = flags_.data();
+    std::int32_t* scan = scan_.data();
+    const std::int32_t* count = count_.data();
+    std::int32_t k = 0;
+    kept_roots_.clear();
+    row_list_.resize(static_cast<std::size_t>(w));
+    if (static_cast<std::int64_t>(w) * h > 0) scan[0] = 0;  // (write_candidates_span_kernel reads it for inactive elements; a root 0 sets its own)
+    for (int y = 0; y < h; ++y) {
+      const std::int32_t m = row_heads_[static_cast<std::size_t>(y)];
+      std::copy(flags + static_cast<std::int64_t>(y) * w, flags + static_cast<std::int64_t>(y) * w + m, row_list_.begin());
+      for (std::int32_t j = 0; j < m; ++j) {
+        const std::int32_t r = row_list_[static_cast<std::size_t>(j)];
+        const std::int32_t keep = count[r] >= min_size ? 1 : 0;
+        k += keep;
+        flags[r] = keep;
+        scan[r] = keep ? k : 0;  // the inclusive scan of the flags at kept roots (0 at the others)
+        if (keep) kept_roots_.push_back(r);
       }
-      return k;
-    } else {
-      b_.for_each_index(n, detail::count_roots_kernel{parent_.data(), count_.data()});
-      b_.for_each_index(n, detail::flag_candidates_kernel{parent_.data(), count_.data(), min_size, flags_.data()});
-      b_.inclusive_scan(flags_.data(), n, scan_.data());
-      std::int32_t k = 0;  // the scan's last element is the number of components kept
-      b_.copy_to_host(&k, scan_.data() + (n - 1), sizeof(std::int32_t));
-      return k;
     }
+    return k;
+  }
+
+  // Device backends: flags (flags_) the roots of the flattened union-find's components of at
+  // least min_size elements and numbers them 1, 2, ... in raster order of their roots (scan_);
+  // returns how many.
+  std::int32_t flag_components(std::int64_t n, std::int32_t min_size) {
+    b_.memset(count_.data(), 0, sizeof(std::int32_t) * n);
+    b_.for_each_index(n, detail::count_roots_kernel{parent_.data(), count_.data()});
+    b_.for_each_index(n, detail::flag_candidates_kernel{parent_.data(), count_.data(), min_size, flags_.data()});
+    b_.inclusive_scan(flags_.data(), n, scan_.data());
+    std::int32_t k = 0;  // the scan's last element is the number of components kept
+    b_.copy_to_host(&k, scan_.data() + (n - 1), sizeof(std::int32_t));
+    return k;
   }
 
   // Fits candidates first+1..num from their pixels; those of 1..first keep their fits (a split
@@ -1021,7 +963,8 @@ class segmenter {
   std::vector<char> keep_, status_;
   std::vector<int> group_, merge_parent_;
   std::vector<std::uint8_t> host_failed_;
-  std::vector<std::int32_t> block_roots_;  // roots listed per block (host backends' numbering)
+  std::vector<std::int32_t> row_heads_;  // runs, then roots, listed per row (host backends' numbering)
+  std::vector<std::int32_t> row_list_;   // one row's roots (host backends' numbering)
   std::vector<std::int32_t> kept_roots_;   // the kept roots in order (host backends' numbering)
   std::vector<std::int32_t> piece_of_, largest_, label_table_;  // split rounds' tables (host backends)
   // split rounds' row spans (host backends): of the failed and the eroded pixels, in the round's

@@ -417,103 +417,86 @@ TEST_CASE_TEMPLATE("erode_failed: the separable erosion marks exactly the pixels
   }
 }
 
-namespace {
-// Runs count_roots_blocks_kernel over `parent` (a forest whose flattened form is `flat`) in
-// blocks of `block` elements and checks it against count_roots_kernel's counts of `flat` (want):
-// the counts, the flattened forest, and each block's list of its roots, in order.
-void check_count_roots_blocks(const std::vector<std::int32_t>& parent, const std::vector<std::int32_t>& flat,
-                              const std::vector<std::int32_t>& want_counts, int block, cpu::mode m) {
-  CAPTURE(block);
-  const auto n = static_cast<std::int64_t>(parent.size());
-  const std::int64_t blocks = (n + block - 1) / block;
-  std::vector<std::int32_t> counts(parent.size(), 0), roots(parent.size(), -7), nroots(static_cast<std::size_t>(blocks), -7);
-  std::vector<std::int32_t> forest = parent;
-  cpu{m}.for_each_index(blocks, detail::count_roots_blocks_kernel{forest.data(), counts.data(), n, block, roots.data(),
-                                                                  nroots.data()});
-  CHECK(counts == want_counts);
-  CHECK(forest == flat);
-  // each block lists exactly its roots, in order, from its first element on
-  for (std::int64_t k = 0; k < blocks; ++k) {
-    std::vector<std::int32_t> want;
-    for (std::int64_t i = k * block; i < std::min<std::int64_t>(n, (k + 1) * block); ++i)
-      if (flat[static_cast<std::size_t>(i)] == i) want.push_back(static_cast<std::int32_t>(i));
-    REQUIRE(nroots[static_cast<std::size_t>(k)] == static_cast<std::int32_t>(want.size()));
-    CHECK(std::equal(want.begin(), want.end(), roots.begin() + k * block));
-  }
-}
-}  // namespace
-
-// The segmenter counts each component's elements; host backends count by runs of equal roots in
-// blocks (detail::count_roots_blocks_kernel) instead of one atomic add per element.
-TEST_CASE("count_roots_blocks_kernel flattens, counts as count_roots_kernel does and lists the roots") {
-  lcg_noise g(23);
-  const std::int64_t n = 5000;
-  std::vector<std::int32_t> parent(static_cast<std::size_t>(n));
-  std::int32_t root = 0;
-  for (std::int64_t i = 0; i < n; ++i) {  // runs of roots, some inactive (-1), roots repeating
-    if (g.uniform01() < 0.05) root = static_cast<std::int32_t>(g.next_u32(static_cast<std::uint32_t>(n)));
-    parent[static_cast<std::size_t>(i)] = g.uniform01() < 0.1 ? -1 : root;
-  }
-  for (std::int64_t i = 0; i < n; ++i)  // a flattened forest: every root its own parent
-    if (parent[static_cast<std::size_t>(i)] >= 0) parent[static_cast<std::size_t>(parent[static_cast<std::size_t>(i)])] = parent[static_cast<std::size_t>(i)];
-  const std::vector<std::int32_t> flat = parent;
-  // ... whose members half the time point to the previous member of their component instead
-  // (chains of any length to the root), which the kernel must flatten
-  std::vector<std::int32_t> last(static_cast<std::size_t>(n), -1);
-  for (std::int64_t i = 0; i < n; ++i) {
-    const std::int32_t r = flat[static_cast<std::size_t>(i)];
-    if (r < 0 || r == i) continue;
-    if (last[static_cast<std::size_t>(r)] >= 0 && g.uniform01() < 0.5) parent[static_cast<std::size_t>(i)] = last[static_cast<std::size_t>(r)];
-    last[static_cast<std::size_t>(r)] = static_cast<std::int32_t>(i);
-  }
-  REQUIRE(parent != flat);
-  std::vector<std::int32_t> a(static_cast<std::size_t>(n), 0);
-  cpu{}.for_each_index(n, detail::count_roots_kernel{flat.data(), a.data()});
-  for (const int block : {1, 7, 1024})
-    for (const cpu::mode m : {cpu::mode::serial, cpu::mode::parallel}) check_count_roots_blocks(parent, flat, a, block, m);
-  CHECK(std::count_if(a.begin(), a.end(), [](std::int32_t k) { return k > 0; }) > 50);
-}
-
-// The forests the segmenter's union-find leaves: each row run of active elements points to its
-// first element, which is a root or points to an earlier run's first element; inactive elements
-// (-1) come in runs too.  Runs of every length from 1 to 300, roots at the start of runs that
-// other runs' first elements point to, blocks that cut runs anywhere.
-TEST_CASE("count_roots_blocks_kernel on forests of runs linked to their first element") {
+// The segmenter counts each component's elements; host backends count them by the row pass's runs
+// (detail::uf_count_runs_kernel), one walk and at most one atomic add per run, and flatten only the
+// runs' first elements.  Forests as the union-find leaves them, in rows of width w: each run of
+// active elements points to its first element, which is a root or points to an earlier run's first
+// element (a chain of any length); inactive runs between; some elements inside runs point to an
+// ancestor of their run's first element instead (path halving's stores).  Runs of 1 to 300
+// elements, rows of one element, rows without runs.
+TEST_CASE("uf_count_runs_kernel counts the components by runs, lists each row's roots, and leaves parent[parent[i]] the root") {
   lcg_noise g(41);
-  for (const int max_run : {3, 20, 70, 300}) {
+  int checked_roots = 0;
+  for (const auto& [w, max_run] : {std::pair{1, 1}, std::pair{7, 3}, std::pair{64, 20}, std::pair{161, 70}, std::pair{400, 300}}) {
+    CAPTURE(w);
     CAPTURE(max_run);
-    const std::int64_t n = 6007;
-    std::vector<std::int32_t> parent(static_cast<std::size_t>(n), -1);
-    std::vector<std::int32_t> heads;
-    for (std::int64_t i = 0; i < n;) {
-      const std::int64_t len = std::min<std::int64_t>(n - i, 1 + g.next_u32(static_cast<std::uint32_t>(max_run)));
-      if (g.uniform01() < 0.25) {  // an inactive run
-        i += len;
-        continue;
+    const int h = 37;
+    const std::size_t n = static_cast<std::size_t>(w) * h;
+    std::vector<std::int32_t> parent(n, -1), len(n, 0x5a5a5a5a), heads(n, -7), nheads(static_cast<std::size_t>(h), 0);
+    std::vector<std::int32_t> all_heads, run_of(n, -1);
+    for (int y = 0; y < h; ++y) {
+      const std::size_t o = static_cast<std::size_t>(y) * w;
+      for (int x = 0; x < w;) {
+        const int l = std::min(w - x, 1 + static_cast<int>(g.next_u32(static_cast<std::uint32_t>(max_run))));
+        if (y % 11 == 5 || g.uniform01() < 0.25) {  // an inactive run (row 5 and 16, 27: all inactive)
+          x += l;
+          continue;
+        }
+        const auto head = static_cast<std::int32_t>(o + x);
+        const std::int32_t up = !all_heads.empty() && g.uniform01() < 0.7
+                                    ? all_heads[g.next_u32(static_cast<std::uint32_t>(all_heads.size()))]
+                                    : head;
+        parent[static_cast<std::size_t>(head)] = up;
+        for (int j = 1; j < l; ++j) parent[o + x + j] = head;
+        for (int j = 0; j < l; ++j) run_of[o + x + j] = head;
+        len[static_cast<std::size_t>(head)] = l;
+        heads[o + static_cast<std::size_t>(nheads[static_cast<std::size_t>(y)]++)] = head;
+        all_heads.push_back(head);
+        x += l;
       }
-      const auto head = static_cast<std::int32_t>(i);
-      const std::int32_t up = !heads.empty() && g.uniform01() < 0.7
-                                  ? heads[g.next_u32(static_cast<std::uint32_t>(heads.size()))]
-                                  : head;
-      parent[static_cast<std::size_t>(i)] = up;
-      for (std::int64_t j = i + 1; j < i + len; ++j) parent[static_cast<std::size_t>(j)] = head;
-      heads.push_back(head);
-      i += len;
     }
-    std::vector<std::int32_t> flat(parent);
-    for (std::int64_t i = 0; i < n; ++i) {
-      std::int32_t r = parent[static_cast<std::size_t>(i)];
-      if (r < 0) continue;
+    auto root_of = [&](std::int32_t r) {
       while (parent[static_cast<std::size_t>(r)] != r) r = parent[static_cast<std::size_t>(r)];
-      flat[static_cast<std::size_t>(i)] = r;
+      return r;
+    };
+    std::vector<std::int32_t> flat(n, -1);
+    for (std::size_t i = 0; i < n; ++i)
+      if (parent[i] >= 0) flat[i] = root_of(parent[i]);
+    // elements inside runs that point to an ancestor of their run's first element instead
+    for (std::size_t i = 0; i < n; ++i)
+      if (parent[i] >= 0 && parent[i] != static_cast<std::int32_t>(i) && run_of[i] != static_cast<std::int32_t>(i) && g.uniform01() < 0.3)
+        parent[i] = parent[static_cast<std::size_t>(parent[i])];
+    std::vector<std::int32_t> size(n, 0);
+    for (std::size_t i = 0; i < n; ++i)
+      if (flat[i] >= 0) ++size[static_cast<std::size_t>(flat[i])];
+    for (const cpu::mode m : {cpu::mode::serial, cpu::mode::parallel}) {
+      std::vector<std::int32_t> p = parent, c = len, hd = heads, nh = nheads;
+      cpu{m}.for_each_index(h, detail::uf_count_runs_kernel{p.data(), detail::row_runs{c.data(), hd.data(), nh.data()}, w});
+      int wrong_root = 0, wrong_size = 0, wrong_head = 0, roots = 0;
+      for (std::size_t i = 0; i < n; ++i) {
+        wrong_root += detail::uf_head_root(p.data(), static_cast<std::int64_t>(i)) != flat[i];
+        const bool root = flat[i] == static_cast<std::int32_t>(i);
+        roots += root;
+        wrong_size += root && c[i] != size[i];
+        wrong_head += run_of[i] == static_cast<std::int32_t>(i) && p[i] != flat[i];  // first elements flattened
+      }
+      CHECK(wrong_root == 0);
+      CHECK(wrong_size == 0);
+      CHECK(wrong_head == 0);
+      // each row lists exactly its roots, in order
+      for (int y = 0; y < h; ++y) {
+        std::vector<std::int32_t> want;
+        for (int x = 0; x < w; ++x)
+          if (flat[static_cast<std::size_t>(y) * w + x] == static_cast<std::int32_t>(static_cast<std::size_t>(y) * w + x))
+            want.push_back(static_cast<std::int32_t>(static_cast<std::size_t>(y) * w + x));
+        REQUIRE(nh[static_cast<std::size_t>(y)] == static_cast<std::int32_t>(want.size()));
+        CHECK(std::equal(want.begin(), want.end(), hd.begin() + static_cast<std::ptrdiff_t>(y) * w));
+      }
+      checked_roots += roots;
     }
-    REQUIRE(parent != flat);
-    std::vector<std::int32_t> a(static_cast<std::size_t>(n), 0);
-    cpu{}.for_each_index(n, detail::count_roots_kernel{flat.data(), a.data()});
-    for (const int block : {16, 33, 100, 1024})
-      for (const cpu::mode m : {cpu::mode::serial, cpu::mode::parallel}) check_count_roots_blocks(parent, flat, a, block, m);
-    CHECK(std::count_if(a.begin(), a.end(), [](std::int32_t k) { return k > 0; }) > 5);
+    REQUIRE(parent != flat);  // chains and halving stores to walk
   }
+  CHECK(checked_roots > 200);
 }
 
 TEST_CASE_TEMPLATE("grid4_adjacency: components equal a serial union-find on random images", B, EDGEPLANE_TEST_BACKENDS) {
@@ -525,7 +508,7 @@ TEST_CASE_TEMPLATE("grid4_adjacency: components equal a serial union-find on ran
   // pixel mostly keeps its left neighbour's level: whole 16-pixel blocks then join into one run,
   // and runs cross blocks, which the host passes take in one step.
   lcg_noise rng(17);
-  [[maybe_unused]] int all_roots = 0;  // (the host's row pass's zeroed counts: not vacuous)
+  [[maybe_unused]] int all_roots = 0;  // (the host's counts by runs: not vacuous)
   for (const auto& [w, h] : {std::pair{1, 1}, std::pair{1, 9}, std::pair{13, 1}, std::pair{37, 23}, std::pair{64, 40},
                              std::pair{100, 30}, std::pair{161, 12}}) {
     for (const double holes : {0.0, 0.02, 0.2, 0.6})
@@ -588,28 +571,50 @@ TEST_CASE_TEMPLATE("grid4_adjacency: components equal a serial union-find on ran
           std::vector<std::uint16_t> right(static_cast<std::size_t>(blocks) * h, 0xa5a5);
           device_array<std::int32_t, B> parent_k(b, n, -7);
           const detail::grid4_adjacency<detail::covered_active> adj{z.cview(w, h), active, 0.06f, 0.f, 0.f};
-          // ... and zeroes, in counts full of garbage, the entries of the elements that can be
-          // roots (the runs' first elements), so that the root counts need no clearing pass: every
-          // root's entry must be 0, and the other entries untouched where no run starts
-          std::vector<std::int32_t> counts(n, 0x5a5a5a5a);
-          const bool zeroed = detail::unite_components(b, static_cast<std::int64_t>(n), active,
-                                                       static_cast<std::int64_t>(n), adj, parent_k.data(),
-                                                       right.data(), counts.data());
-          CHECK(zeroed);
-          b.for_each_index(static_cast<std::int64_t>(n), detail::uf_flatten_kernel{parent_k.data()});
-          CHECK(parent_k.host() == want);
-          int roots = 0, unzeroed_roots = 0, zeroed_inside_runs = 0;
+          // ... and records its runs (detail::row_runs) in buffers full of garbage: each run's
+          // length at its first element (other entries untouched) and each row's first elements in
+          // order.  uf_count_runs_kernel then counts the components, and every element's root is
+          // parent[parent[i]].
+          std::vector<std::int32_t> len(n, 0x5a5a5a5a), heads(n, -7), nheads(static_cast<std::size_t>(h), -7);
+          const detail::row_runs runs{len.data(), heads.data(), nheads.data()};
+          const bool recorded = detail::unite_components(b, static_cast<std::int64_t>(n), active,
+                                                         static_cast<std::int64_t>(n), adj, parent_k.data(),
+                                                         right.data(), runs);
+          CHECK(recorded);
+          std::vector<std::int32_t> want_len(n, 0x5a5a5a5a), want_heads;
+          std::vector<std::int32_t> want_nheads(static_cast<std::size_t>(h), 0);
+          for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x) {
+              const std::size_t i = static_cast<std::size_t>(y) * w + x;
+              // a run starts at an active element whose left neighbour does not join it
+              if (!cov[i] || (x > 0 && cov[i - 1] && adj.joins_right(x - 1, y))) continue;
+              int l = 1;
+              while (x + l < w && adj.joins_right(x + l - 1, y)) ++l;
+              want_len[i] = l;
+              want_heads.push_back(static_cast<std::int32_t>(i));
+              ++want_nheads[static_cast<std::size_t>(y)];
+            }
+          CHECK(len == want_len);
+          CHECK(nheads == want_nheads);
+          std::vector<std::int32_t> got_heads;
+          for (int y = 0; y < h; ++y)
+            for (int k = 0; k < nheads[static_cast<std::size_t>(y)]; ++k)
+              got_heads.push_back(heads[static_cast<std::size_t>(y) * w + static_cast<std::size_t>(k)]);
+          CHECK(got_heads == want_heads);
+          b.for_each_index(h, detail::uf_count_runs_kernel{parent_k.data(), runs, w});
+          std::vector<std::int32_t> size(n, 0);
+          for (std::size_t i = 0; i < n; ++i)
+            if (want[i] >= 0) ++size[static_cast<std::size_t>(want[i])];
+          int roots = 0, wrong_root = 0, wrong_size = 0;
           for (std::size_t i = 0; i < n; ++i) {
+            wrong_root += detail::uf_head_root(parent_k.data(), static_cast<std::int64_t>(i)) != want[i];
             const bool root = want[i] == static_cast<std::int32_t>(i);
             roots += root;
-            unzeroed_roots += root && counts[i] != 0;
-            // an active element whose left neighbour in its row joins it is no run's first element
-            const int x = static_cast<int>(i % static_cast<std::size_t>(w)), y = static_cast<int>(i / static_cast<std::size_t>(w));
-            zeroed_inside_runs += x > 0 && cov[i] && cov[i - 1] && adj.joins_right(x - 1, y) && counts[i] != 0x5a5a5a5a;
+            wrong_size += root && len[i] != size[i];
           }
           all_roots += roots;
-          CHECK(unzeroed_roots == 0);
-          CHECK(zeroed_inside_runs == 0);
+          CHECK(wrong_root == 0);
+          CHECK(wrong_size == 0);
           int wrong = 0;
           for (int y = 0; y < h; ++y)
             for (int k = 0; k < blocks; ++k)
@@ -684,7 +689,7 @@ TEST_CASE("unite_components: rows' column spans give the row passes' results wit
   // only from the 16-pixel block of a span's first pixel to its end.  Active pixels lie only in
   // random spans (empty ones too, starting and ending anywhere in a block, at the row's ends);
   // given exactly or widened, the spans change nothing: the components, the right joins kept for
-  // the vertical unions, and the root counts zeroed.
+  // the vertical unions, and the runs recorded (lengths, each row's first elements).
   lcg_noise rng(77);
   for (const int w : {13, 16, 17, 37, 100, 161, 300}) {
     CAPTURE(w);
@@ -713,25 +718,36 @@ TEST_CASE("unite_components: rows' column spans give the row passes' results wit
     const detail::grid4_adjacency<detail::mask_bit_active> adj{make_view<const float>(depth.data(), w, h), active, 0.06f,
                                                                0.f, 0.f};
     const int blocks = detail::join_blocks(w);
+    // the flattened forest, the right joins, the run lengths and each row's listed first elements
     auto run = [&](const std::int32_t* spans, std::vector<std::int32_t>& parent, std::vector<std::uint16_t>& right,
-                   std::vector<std::int32_t>& counts, cpu::mode m) {
+                   std::vector<std::int32_t>& counts, std::vector<std::int32_t>& listed, cpu::mode m) {
       parent.assign(n, -7);
       right.assign(static_cast<std::size_t>(blocks) * h, 0xa5a5);
       counts.assign(n, 0x5a5a5a5a);
+      std::vector<std::int32_t> heads(n, -7), nheads(static_cast<std::size_t>(h), -7);
       detail::unite_components(cpu{m}, static_cast<std::int64_t>(n), active, static_cast<std::int64_t>(n), adj,
-                               parent.data(), right.data(), counts.data(), spans);
+                               parent.data(), right.data(), detail::row_runs{counts.data(), heads.data(), nheads.data()},
+                               spans);
       cpu{m}.for_each_index(static_cast<std::int64_t>(n), detail::uf_flatten_kernel{parent.data()});
+      listed.clear();
+      for (int y = 0; y < h; ++y) {
+        listed.push_back(nheads[static_cast<std::size_t>(y)]);
+        for (int k = 0; k < nheads[static_cast<std::size_t>(y)]; ++k)
+          listed.push_back(heads[static_cast<std::size_t>(y) * w + static_cast<std::size_t>(k)]);
+      }
     };
-    std::vector<std::int32_t> p0, c0, p1, c1;
+    std::vector<std::int32_t> p0, c0, l0, p1, c1, l1;
     std::vector<std::uint16_t> r0, r1;
-    run(nullptr, p0, r0, c0, cpu::mode::serial);
+    run(nullptr, p0, r0, c0, l0, cpu::mode::serial);
     REQUIRE(std::count(p0.begin(), p0.end(), -1) > static_cast<std::ptrdiff_t>(n / 5));  // spans cut the rows
+    REQUIRE(l0.size() > static_cast<std::size_t>(h) + 10);                                // runs listed
     for (const auto* spans : {&exact, &wide})
       for (const cpu::mode m : {cpu::mode::serial, cpu::mode::parallel}) {
-        run(spans->data(), p1, r1, c1, m);
+        run(spans->data(), p1, r1, c1, l1, m);
         CHECK(p1 == p0);
         CHECK(r1 == r0);
         CHECK(c1 == c0);
+        CHECK(l1 == l0);
       }
   }
 }

@@ -390,6 +390,7 @@ struct same_label_adjacency {
 };
 /// out[i] = the 1-based region id of i's region when kept (flags[root] = 1) and at most
 /// max_regions, else 0; the region's root also records its plane's label: origin[id] = labels[i].
+/// `parent` flat or counted by runs (uf_head_root).
 struct region_relabel_kernel {
   const std::int32_t* parent;
   const std::int32_t* flags;
@@ -399,7 +400,7 @@ struct region_relabel_kernel {
   std::uint16_t* out;
   std::uint16_t* origin;
   EDGEPLANE_HD void operator()(std::int64_t i) const {
-    const std::int32_t r = parent[i];
+    const std::int32_t r = uf_head_root(parent, i);
     const bool kept = r >= 0 && flags[r] && scan[r] <= max_regions;
     out[i] = kept ? static_cast<std::uint16_t>(scan[r]) : std::uint16_t(0);
     if (kept && r == static_cast<std::int32_t>(i)) origin[scan[r]] = labels[i];

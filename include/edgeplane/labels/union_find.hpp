@@ -126,6 +126,16 @@ EDGEPLANE_HD EDGEPLANE_INLINE void span_from_block(const std::int32_t* spans, in
   x = x_end > 0 ? spans[2 * y] / 16 * 16 : 0;
 }
 
+/// The host row pass's record of its runs (uf_init_runs_kernel), for counting the components by
+/// runs (uf_count_runs_kernel): len[h] = the number of elements of the run whose first element is
+/// h (other entries untouched); row y's runs' first elements, in order, at heads[y * w + k] for
+/// k < nheads[y] (w: the grid's width).  The three are given together or not at all.
+struct row_runs {
+  std::int32_t* len = nullptr;
+  std::int32_t* heads = nullptr;
+  std::int32_t* nheads = nullptr;
+};
+
 /// Host row pass of connected_components for adjacencies with has_grid_joins (one work item per
 /// row; rows are independent): parent[i] = -1 for inactive elements, else the first element of
 /// its run of horizontally joined pixels, which is the run's smallest element and its root so far.
@@ -138,10 +148,9 @@ struct uf_init_runs_kernel {
   /// x, right_lanes<16>(x, y), kept at right_bits[y * join_blocks(w) + x / 16] for every block
   /// the lanes loop covers (x + 16 < w), for the vertical unions to read.
   std::uint16_t* right_bits = nullptr;
-  /// When not null: set to 0 at every run's first element, the only elements that can become
-  /// roots (a component's root is its smallest element, which starts its row's run), so that
-  /// root counts need no clearing pass over all elements.
-  std::int32_t* zero_heads = nullptr;
+  /// Where given (runs.len not null): each run's length and row y's list of its runs' first
+  /// elements (row_runs), for uf_count_runs_kernel.
+  row_runs runs{};
   /// (Spans) row y's active pixels all lie in columns [spans[2y], spans[2y + 1]) (empty where
   /// the second is not above the first); the row pass reads only from the 16-pixel block holding
   /// the first of them to the last, and marks the rest inactive without testing them.  (A
@@ -150,7 +159,9 @@ struct uf_init_runs_kernel {
   EDGEPLANE_HOST_CLONES EDGEPLANE_HD void operator()(std::int64_t row) const {
     const int y = static_cast<int>(row), w = adj.grid_width();
     const std::int64_t o = static_cast<std::int64_t>(y) * w;
-    std::int32_t* const zero = zero_heads;
+    std::int32_t* const len = runs.len;
+    std::int32_t* const heads = len ? runs.heads + o : nullptr;
+    std::int32_t m = 0;  // runs listed
     std::int32_t start = -1;
     bool joined = false;  // the previous pixel joins this one
     int x = 0, x_end = w;
@@ -177,10 +188,11 @@ struct uf_init_runs_kernel {
           }
           if (!joined) {
             start = static_cast<std::int32_t>(i);
-            if (zero) zero[i] = 0;
+            if (len) heads[m++] = start;
           }
           parent[i] = start;
           joined = (right >> l) & 1u;
+          if (len && !joined) len[start] = static_cast<std::int32_t>(i) - start + 1;
         }
       }
       if (Spans && kept)
@@ -195,13 +207,15 @@ struct uf_init_runs_kernel {
       }
       if (!joined) {
         start = static_cast<std::int32_t>(i);
-        if (zero) zero[i] = 0;
+        if (len) heads[m++] = start;
       }
       parent[i] = start;
+      if (len) len[start] = static_cast<std::int32_t>(i) - start + 1;
       joined = adj.joins_right(x, y);
     }
     if constexpr (Spans)
       for (; x < w; ++x) parent[o + x] = -1;  // right of a span
+    if (len) runs.nheads[y] = m;
   }
 };
 /// Then the vertical unions, one work item per row.  Host lanes skip a pair (x, y)-(x, y + 1)
@@ -278,6 +292,55 @@ struct uf_flatten_kernel {
     if (atomic_load(parent + i) >= 0) atomic_store(parent + i, uf_root(parent, static_cast<std::int32_t>(i)));
   }
 };
+
+/// Host backends: the components' sizes from the row pass's runs (row_runs), one work item per
+/// row, once all unions are done.  Each run's first element h takes its root (parent[h] = root,
+/// as uf_flatten_kernel does for every element) and adds its run's length len[h] to len[root]; a
+/// root keeps its own run's length there, so len[r] ends as the size of r's component at every
+/// root r (other entries: their runs' lengths).  A run whose first element's parent is the one the
+/// previous walk started from takes that walk's root (the roots are final), and runs of one root
+/// in a row add once.  Row y's list ends holding its roots (the runs whose first element is its
+/// own parent), in order, and nheads[y] their number.  The other elements are not flattened:
+/// every active element's parent is a run's first element (its own, or an ancestor that path
+/// halving stored), so once this has run, parent[parent[i]] is i's root (uf_head_root).
+struct uf_count_runs_kernel {
+  std::int32_t* parent;
+  row_runs runs;
+  int w;
+  EDGEPLANE_HD void operator()(std::int64_t row) const {
+    std::int32_t* const list = runs.heads + row * w;
+    std::int32_t* const len = runs.len;
+    const std::int32_t m = runs.nheads[row];
+    std::int32_t listed = 0, walked = -1, walked_root = -1, cur = -1, sum = 0;
+    for (std::int32_t j = 0; j < m; ++j) {
+      const std::int32_t h = list[j], p = atomic_load(parent + h);
+      if (p == h) {  // a root: its length stays (only other rows' runs add to it)
+        list[listed++] = h;
+        continue;
+      }
+      if (p != walked) {
+        walked = p;
+        walked_root = uf_root(parent, h);
+      }
+      atomic_store(parent + h, walked_root);
+      if (walked_root != cur) {
+        if (cur >= 0) atomic_add(len + cur, sum);
+        cur = walked_root;
+        sum = 0;
+      }
+      sum += len[h];  // (not a root: no other row adds to it)
+    }
+    if (cur >= 0) atomic_add(len + cur, sum);
+    runs.nheads[row] = listed;
+  }
+};
+/// i's root (or -1 where i is inactive) where parent is flat (every element's parent its root) or
+/// counted by uf_count_runs_kernel (every parent a root or a run's first element, which points to
+/// its root).
+EDGEPLANE_HD EDGEPLANE_INLINE std::int32_t uf_head_root(const std::int32_t* parent, std::int64_t i) {
+  const std::int32_t r = parent[i];
+  return r >= 0 ? parent[r] : r;
+}
 
 /// Active elements: a nonzero byte in either of two masks (the two diagonal coverages).
 struct covered_active {
@@ -547,14 +610,14 @@ namespace detail {
 /// that flatten within their next pass.
 /// `right_bits` (optional, host backends): scratch of join_blocks(width) * height entries, in which
 /// the row pass keeps each block's right joins for the vertical unions (which otherwise compute
-/// them again, twice); used only by adjacencies with has_join_lanes.  `zero_roots` (optional, n
-/// elements): returns true where it was set to 0 at every element that can be a root (the host
-/// row pass's run starts), false where it was left untouched.  `spans` (optional, host backends,
+/// them again, twice); used only by adjacencies with has_join_lanes.  `runs` (optional, host
+/// backends): returns true where the row pass recorded its runs there (row_runs; then the
+/// components can be counted by uf_count_runs_kernel), false where it was left untouched.  `spans` (optional, host backends,
 /// grid adjacencies): each row's active pixels lie in columns [spans[2y], spans[2y + 1]), and
 /// the row passes read only those (uf_init_runs_kernel::spans).
 template <class Backend, class Active, class Adjacency>
 bool unite_components(const Backend& b, std::int64_t n, Active active, std::int64_t work_items, Adjacency adj,
-                      std::int32_t* parent, std::uint16_t* right_bits = nullptr, std::int32_t* zero_roots = nullptr,
+                      std::int32_t* parent, std::uint16_t* right_bits = nullptr, row_runs runs = {},
                       const std::int32_t* spans = nullptr) {
   require(n >= 0 && n < (std::int64_t(1) << 31), "union-find supports up to 2^31 - 1 elements");
   if constexpr (Backend::host_accessible && has_grid_joins<Adjacency>) {
@@ -563,14 +626,14 @@ bool unite_components(const Backend& b, std::int64_t n, Active active, std::int6
     if constexpr (!has_join_lanes<Adjacency>) right_bits = nullptr;
     if (spans) {
       b.for_each_index(adj.grid_height(),
-                       uf_init_runs_kernel<Active, Adjacency, true>{active, adj, parent, right_bits, zero_roots, spans});
+                       uf_init_runs_kernel<Active, Adjacency, true>{active, adj, parent, right_bits, runs, spans});
       b.for_each_index(adj.grid_height(), uf_union_down_kernel<Adjacency, true>{adj, parent, right_bits, spans});
     } else {
       b.for_each_index(adj.grid_height(),
-                       uf_init_runs_kernel<Active, Adjacency>{active, adj, parent, right_bits, zero_roots});
+                       uf_init_runs_kernel<Active, Adjacency>{active, adj, parent, right_bits, runs});
       b.for_each_index(adj.grid_height(), uf_union_down_kernel<Adjacency>{adj, parent, right_bits});
     }
-    return zero_roots != nullptr;
+    return runs.len != nullptr;
   }
   b.for_each_index(n, uf_init_kernel<Active>{active, parent});
   if constexpr (is_grid_adjacency<Adjacency>) {
