@@ -162,7 +162,7 @@ struct uf_init_runs_kernel {
     std::int32_t* const len = runs.len;
     std::int32_t* const heads = len ? runs.heads + o : nullptr;
     std::int32_t m = 0;  // runs listed
-    std::int32_t start = -1;
+    std::int32_t start = -1, last = -1;  // the current run's first element, the last active one
     bool joined = false;  // the previous pixel joins this one
     int x = 0, x_end = w;
     if constexpr (Spans) {  // the block of the span's first pixel .. its end; to its left, inactive
@@ -186,13 +186,16 @@ struct uf_init_runs_kernel {
             joined = false;
             continue;
           }
-          if (!joined) {
+          if (!joined) {  // (the previous run's length, here, costs no branch of its own)
+            if (len) {
+              if (start >= 0) len[start] = last - start + 1;
+              heads[m++] = static_cast<std::int32_t>(i);
+            }
             start = static_cast<std::int32_t>(i);
-            if (len) heads[m++] = start;
           }
           parent[i] = start;
+          last = static_cast<std::int32_t>(i);
           joined = (right >> l) & 1u;
-          if (len && !joined) len[start] = static_cast<std::int32_t>(i) - start + 1;
         }
       }
       if (Spans && kept)
@@ -206,16 +209,22 @@ struct uf_init_runs_kernel {
         continue;
       }
       if (!joined) {
+        if (len) {
+          if (start >= 0) len[start] = last - start + 1;
+          heads[m++] = static_cast<std::int32_t>(i);
+        }
         start = static_cast<std::int32_t>(i);
-        if (len) heads[m++] = start;
       }
       parent[i] = start;
-      if (len) len[start] = static_cast<std::int32_t>(i) - start + 1;
+      last = static_cast<std::int32_t>(i);
       joined = adj.joins_right(x, y);
     }
     if constexpr (Spans)
       for (; x < w; ++x) parent[o + x] = -1;  // right of a span
-    if (len) runs.nheads[y] = m;
+    if (len) {
+      if (start >= 0) len[start] = last - start + 1;
+      runs.nheads[y] = m;
+    }
   }
 };
 /// Then the vertical unions, one work item per row.  Host lanes skip a pair (x, y)-(x, y + 1)
