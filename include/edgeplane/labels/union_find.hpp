@@ -18,6 +18,7 @@
 //   non-root.  So it walks to the root with loads only and writes parent[i] alone; a concurrent
 //   reader of parent[i] sees either i's old parent or its root, both of which lead to the root.
 #pragma once
+#include <bit>
 #include <cmath>
 #include <cstdint>
 
@@ -179,24 +180,33 @@ struct uf_init_runs_kernel {
         for (int l = 0; l < L; ++l) act |= static_cast<unsigned>(active(o + x + l)) << l;
         const unsigned right = adj.template right_lanes<L>(x, y);
         if (kept) kept[x / L] = static_cast<std::uint16_t>(right);
+        // The runs starting in the block: active lanes that the lane to their left does not
+        // join (a join implies both lanes active).  Each active lane's parent is the last start
+        // at or before it, or the run carried in from the previous block: without branches, a
+        // leading-zero count per lane (vector code where the target has one).
+        const std::int32_t base = static_cast<std::int32_t>(o + x);
+        const unsigned starts = act & ~((right << 1) | static_cast<unsigned>(joined));
+        std::int32_t* const out = parent + o + x;
         for (int l = 0; l < L; ++l) {
-          const std::int64_t i = o + x + l;
-          if (!((act >> l) & 1u)) {
-            parent[i] = -1;
-            joined = false;
-            continue;
-          }
-          if (!joined) {  // (the previous run's length, here, costs no branch of its own)
-            if (len) {
-              if (start >= 0) len[start] = last - start + 1;
-              heads[m++] = static_cast<std::int32_t>(i);
-            }
-            start = static_cast<std::int32_t>(i);
-          }
-          parent[i] = start;
-          last = static_cast<std::int32_t>(i);
-          joined = (right >> l) & 1u;
+          const unsigned upto = starts & ((2u << l) - 1u);
+          const int hb = 31 - std::countl_zero(upto);  // the last start at or before lane l (-1: none)
+          const std::int32_t p = hb >= 0 ? base + hb : start;
+          out[l] = (act >> l) & 1u ? p : -1;
         }
+        if (starts != 0) {
+          for (unsigned u = starts; u != 0; u &= u - 1u) {  // each new run: the previous one's length
+            const int sl = lowest_bit(u);
+            if (len) {
+              const unsigned before = act & ((1u << sl) - 1u);
+              const std::int32_t end = before ? base + 31 - std::countl_zero(before) : last;
+              if (start >= 0) len[start] = end - start + 1;
+              heads[m++] = base + sl;
+            }
+            start = base + sl;
+          }
+        }
+        if (act != 0) last = base + 31 - std::countl_zero(act);
+        joined = (right >> (L - 1)) & 1u;
       }
       if (Spans && kept)
         for (int b = x / L; b < join_blocks(w); ++b) kept[b] = 0;  // (blocks right of a span)
