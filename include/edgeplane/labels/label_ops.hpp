@@ -338,9 +338,7 @@ struct label_rows_kernel {
   image_view<const std::uint16_t> dilated;   // the dilation's output (erosion only)
   image_view<std::uint16_t> out;
   int r;
-  // (page-aligned, as the edge kernel: session 31 saw its samples grow by 40-80 % with no
-  // change to it when other code moved it within a page)
-  EDGEPLANE_PAGE_ALIGNED EDGEPLANE_HOST_CLONES void operator()(std::int64_t row) const {
+  EDGEPLANE_HOST_CLONES void operator()(std::int64_t row) const {
     const int y = static_cast<int>(row), w = original.width;
     const image_view<const std::uint16_t> taps = Dilate ? original : dilated;
     std::uint16_t* o = &out(0, y);  // the accumulator: the minimum of label - 1 / all taps set
