@@ -967,8 +967,9 @@ class segmenter {
   std::vector<std::int32_t> row_list_;   // one row's roots (host backends' numbering)
   std::vector<std::int32_t> kept_roots_;   // the kept roots in order (host backends' numbering)
   std::vector<std::int32_t> piece_of_, largest_, label_table_;  // split rounds' tables (host backends)
-  // split rounds' row spans (host backends): of the failed and the eroded pixels, in the round's
-  // rectangle; the failed ones in image columns (the refit's); the columns the erosion looks at
+  // split rounds' row spans (host backends), in the columns of the round's rectangle: of the
+  // failed and the eroded pixels (the refit adds the rectangle's x0), and the columns the erosion
+  // looks at
   std::vector<std::int32_t> failed_spans_, eroded_spans_, scan_spans_;
   std::vector<std::int64_t> piece_size_, rest_size_;
   std::vector<std::uint16_t> right_bits_;  // host backends' union-find: right joins per block of 16

@@ -427,7 +427,8 @@ TEST_CASE_TEMPLATE("erode_failed: the separable erosion marks exactly the pixels
 TEST_CASE("uf_count_runs_kernel counts the components by runs, lists each row's roots, and leaves parent[parent[i]] the root") {
   lcg_noise g(41);
   int checked_roots = 0;
-  for (const auto& [w, max_run] : {std::pair{1, 1}, std::pair{7, 3}, std::pair{64, 20}, std::pair{161, 70}, std::pair{400, 300}}) {
+  for (const auto& shape : {std::pair{1, 1}, std::pair{7, 3}, std::pair{64, 20}, std::pair{161, 70}, std::pair{400, 300}}) {
+    const int w = shape.first, max_run = shape.second;  // (named copies: clang 14 does not capture structured bindings)
     CAPTURE(w);
     CAPTURE(max_run);
     const int h = 37;
@@ -577,10 +578,8 @@ TEST_CASE_TEMPLATE("grid4_adjacency: components equal a serial union-find on ran
           // parent[parent[i]].
           std::vector<std::int32_t> len(n, 0x5a5a5a5a), heads(n, -7), nheads(static_cast<std::size_t>(h), -7);
           const detail::row_runs runs{len.data(), heads.data(), nheads.data()};
-          const bool recorded = detail::unite_components(b, static_cast<std::int64_t>(n), active,
-                                                         static_cast<std::int64_t>(n), adj, parent_k.data(),
-                                                         right.data(), runs);
-          CHECK(recorded);
+          detail::unite_components(b, static_cast<std::int64_t>(n), active, static_cast<std::int64_t>(n), adj,
+                                   parent_k.data(), right.data(), runs);
           std::vector<std::int32_t> want_len(n, 0x5a5a5a5a), want_heads;
           std::vector<std::int32_t> want_nheads(static_cast<std::size_t>(h), 0);
           for (int y = 0; y < h; ++y)
@@ -682,6 +681,20 @@ TEST_CASE_TEMPLATE("erode_failed: on the failed candidates' rectangle it marks w
       CHECK(marked > 100);  // not vacuous
     }
   }
+}
+
+TEST_CASE("unite_components: row runs asked of an adjacency without grid joins are refused") {
+  // Only the host row pass records runs; an adjacency of explicit pairs has no rows, and the
+  // buffers would be left as they were (the counts read from them garbage).
+  const std::vector<std::int32_t> first{0, 1, 2}, second{1, 2, 3};
+  std::vector<std::int32_t> parent(4, -7), len(4, -7), heads(4, -7), nheads(1, -7);
+  const std::vector<std::uint8_t> on(4, 1);
+  const detail::pair_list_adjacency adj{first.data(), second.data()};
+  CHECK_THROWS_AS(detail::unite_components(cpu{}, 4, mask_active{on.data()}, 3, adj, parent.data(), nullptr,
+                                           detail::row_runs{len.data(), heads.data(), nheads.data()}),
+                  edgeplane::error);
+  detail::unite_components(cpu{}, 4, mask_active{on.data()}, 3, adj, parent.data());  // without runs: fine
+  CHECK(resolved(parent) == std::vector<std::int32_t>{0, 0, 0, 0});
 }
 
 TEST_CASE("unite_components: rows' column spans give the row passes' results without them") {

@@ -193,17 +193,15 @@ struct uf_init_runs_kernel {
           const std::int32_t p = hb >= 0 ? base + hb : start;
           out[l] = (act >> l) & 1u ? p : -1;
         }
-        if (starts != 0) {
-          for (unsigned u = starts; u != 0; u &= u - 1u) {  // each new run: the previous one's length
-            const int sl = lowest_bit(u);
-            if (len) {
-              const unsigned before = act & ((1u << sl) - 1u);
-              const std::int32_t end = before ? base + 31 - std::countl_zero(before) : last;
-              if (start >= 0) len[start] = end - start + 1;
-              heads[m++] = base + sl;
-            }
-            start = base + sl;
+        for (unsigned u = starts; u != 0; u &= u - 1u) {  // each new run: the previous one's length
+          const int sl = lowest_bit(u);
+          if (len) {
+            const unsigned before = act & ((1u << sl) - 1u);
+            const std::int32_t end = before ? base + 31 - std::countl_zero(before) : last;
+            if (start >= 0) len[start] = end - start + 1;
+            heads[m++] = base + sl;
           }
+          start = base + sl;
         }
         if (act != 0) last = base + 31 - std::countl_zero(act);
         joined = (right >> (L - 1)) & 1u;
@@ -630,12 +628,12 @@ namespace detail {
 /// `right_bits` (optional, host backends): scratch of join_blocks(width) * height entries, in which
 /// the row pass keeps each block's right joins for the vertical unions (which otherwise compute
 /// them again, twice); used only by adjacencies with has_join_lanes.  `runs` (optional, host
-/// backends): returns true where the row pass recorded its runs there (row_runs; then the
-/// components can be counted by uf_count_runs_kernel), false where it was left untouched.  `spans` (optional, host backends,
+/// backends and adjacencies with has_grid_joins only): the row pass records its runs there
+/// (row_runs), so that the components can be counted by uf_count_runs_kernel.  `spans` (optional, host backends,
 /// grid adjacencies): each row's active pixels lie in columns [spans[2y], spans[2y + 1]), and
 /// the row passes read only those (uf_init_runs_kernel::spans).
 template <class Backend, class Active, class Adjacency>
-bool unite_components(const Backend& b, std::int64_t n, Active active, std::int64_t work_items, Adjacency adj,
+void unite_components(const Backend& b, std::int64_t n, Active active, std::int64_t work_items, Adjacency adj,
                       std::int32_t* parent, std::uint16_t* right_bits = nullptr, row_runs runs = {},
                       const std::int32_t* spans = nullptr) {
   require(n >= 0 && n < (std::int64_t(1) << 31), "union-find supports up to 2^31 - 1 elements");
@@ -652,8 +650,9 @@ bool unite_components(const Backend& b, std::int64_t n, Active active, std::int6
                        uf_init_runs_kernel<Active, Adjacency>{active, adj, parent, right_bits, runs});
       b.for_each_index(adj.grid_height(), uf_union_down_kernel<Adjacency>{adj, parent, right_bits});
     }
-    return runs.len != nullptr;
+    return;
   }
+  require(runs.len == nullptr, "unite_components: row runs are recorded on host backends with grid-join adjacencies only");
   b.for_each_index(n, uf_init_kernel<Active>{active, parent});
   if constexpr (is_grid_adjacency<Adjacency>) {
     require(work_items == n && static_cast<std::int64_t>(adj.grid_width()) * adj.grid_height() == n,
@@ -662,7 +661,6 @@ bool unite_components(const Backend& b, std::int64_t n, Active active, std::int6
   } else {
     b.for_each_index(work_items, uf_union_kernel<Adjacency>{adj, parent});
   }
-  return false;
 }
 }  // namespace detail
 
