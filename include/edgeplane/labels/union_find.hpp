@@ -164,6 +164,14 @@ struct uf_init_runs_kernel {
     std::int32_t* const heads = len ? runs.heads + o : nullptr;
     std::int32_t m = 0;  // runs listed
     std::int32_t start = -1, last = -1;  // the current run's first element, the last active one
+    // a new run from element `first`; the previous run, if any, ended at element `end`
+    const auto begin_run = [&](std::int32_t first, std::int32_t end) {
+      if (len) {
+        if (start >= 0) len[start] = end - start + 1;
+        heads[m++] = first;
+      }
+      start = first;
+    };
     bool joined = false;  // the previous pixel joins this one
     int x = 0, x_end = w;
     if constexpr (Spans) {  // the block of the span's first pixel .. its end; to its left, inactive
@@ -193,15 +201,10 @@ struct uf_init_runs_kernel {
           const std::int32_t p = hb >= 0 ? base + hb : start;
           out[l] = (act >> l) & 1u ? p : -1;
         }
-        for (unsigned u = starts; u != 0; u &= u - 1u) {  // each new run: the previous one's length
+        for (unsigned u = starts; u != 0; u &= u - 1u) {  // each new run, after the block's active lanes before it
           const int sl = lowest_bit(u);
-          if (len) {
-            const unsigned before = act & ((1u << sl) - 1u);
-            const std::int32_t end = before ? base + 31 - std::countl_zero(before) : last;
-            if (start >= 0) len[start] = end - start + 1;
-            heads[m++] = base + sl;
-          }
-          start = base + sl;
+          const unsigned before = act & ((1u << sl) - 1u);
+          begin_run(base + sl, before ? base + 31 - std::countl_zero(before) : last);
         }
         if (act != 0) last = base + 31 - std::countl_zero(act);
         joined = (right >> (L - 1)) & 1u;
@@ -216,13 +219,7 @@ struct uf_init_runs_kernel {
         joined = false;
         continue;
       }
-      if (!joined) {
-        if (len) {
-          if (start >= 0) len[start] = last - start + 1;
-          heads[m++] = static_cast<std::int32_t>(i);
-        }
-        start = static_cast<std::int32_t>(i);
-      }
+      if (!joined) begin_run(static_cast<std::int32_t>(i), last);
       parent[i] = start;
       last = static_cast<std::int32_t>(i);
       joined = adj.joins_right(x, y);
